@@ -1,0 +1,216 @@
+"""Loading DEMs from the files users have.
+
+Readers: GeoTIFF, SRTM ``.hgt`` and ESRI ASCII grids through rasterio;
+``.npy``/``.npz`` arrays with an explicit cell size; the built-in real DEM
+(matplotlib's Jacksboro fault, ``builtin:jacksboro``). A DEM in a geographic
+CRS is reprojected once, on load, to the WGS 84 / UTM zone holding its
+centre (CONTRACT.md), onto the largest axis-aligned grid lying inside the
+source tile, so no cell of the result is invented beyond the data.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+from affine import Affine
+
+from ..errors import InputError
+from .grid import DEM, RepairReport
+from .repair import repair_elevation
+
+BUILTIN_DEMS = ("builtin:jacksboro",)
+EARTH_METRES_PER_DEGREE = 111_320.0
+
+
+def utm_epsg(lon: float, lat: float) -> int:
+    """EPSG code of the WGS 84 / UTM zone holding (lon, lat): 326zz north, 327zz south."""
+    zone = int(math.floor((lon + 180.0) / 6.0)) % 60 + 1
+    return (32600 if lat >= 0 else 32700) + zone
+
+
+def _crs_string(crs) -> str | None:
+    """Normalise any CRS description to 'EPSG:nnnn' where possible."""
+    if crs is None:
+        return None
+    from pyproj import CRS
+
+    try:
+        c = CRS.from_user_input(crs)
+    except Exception as exc:
+        raise InputError(f"unknown CRS {crs!r}: {exc}") from None
+    epsg = c.to_epsg()
+    return f"EPSG:{epsg}" if epsg else c.to_wkt()
+
+
+def load_dem(path: str | os.PathLike | None = None, *, crs=None, cell_size: float | None = None,
+             resolution: float | None = None) -> DEM:
+    """Read a DEM into the world frame of CONTRACT.md, voids filled and spikes repaired.
+
+    Parameters
+    ----------
+    path : file path, or ``builtin:jacksboro`` / None for the built-in real DEM.
+    crs : CRS of the file when it has none (e.g. ``EPSG:31254`` for an ESRI grid),
+        or of a ``.npy``/``.npz`` array. Without one, such DEMs use a local frame.
+    cell_size : metres per cell, required for ``.npy`` (and ``.npz`` without one).
+    resolution : cell size in metres after reprojecting a geographic DEM
+        (default: the geometric mean of the source cell's sides, to 1 m).
+    """
+    if path is None or str(path) in BUILTIN_DEMS:
+        return _load_jacksboro(resolution)
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise InputError(f"DEM file not found: {path}")
+    if os.path.isdir(path):
+        raise InputError(f"DEM path is a directory, not a file: {path}")
+    ext = os.path.splitext(path)[1].lower()
+    if ext in (".npy", ".npz"):
+        return _load_array(path, crs=crs, cell_size=cell_size)
+    return _load_raster(path, crs=crs, resolution=resolution)
+
+
+def _load_raster(path: str, *, crs, resolution: float | None) -> DEM:
+    import rasterio
+    from rasterio.errors import RasterioIOError
+
+    try:
+        with rasterio.open(path) as src:
+            if src.count < 1:
+                raise InputError(f"{path}: raster has no bands")
+            band = src.read(1, masked=True)
+            transform = src.transform
+            file_crs = src.crs
+    except InputError:
+        raise
+    except (RasterioIOError, Exception) as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputError(f"{path}: not a DEM that can be read ({first})") from None
+    if not np.issubdtype(band.dtype, np.number) or band.ndim != 2:
+        raise InputError(f"{path}: not a numeric elevation grid")
+    z = np.ma.getdata(band).astype(np.float64)
+    nodata = np.ma.getmaskarray(band)
+    crs_str = _crs_string(file_crs) if file_crs else _crs_string(crs)
+    return _georeference(z, nodata, transform, crs_str, os.path.basename(path), resolution)
+
+
+def _load_array(path: str, *, crs, cell_size: float | None) -> DEM:
+    try:
+        data = np.load(path, allow_pickle=False)
+    except Exception as exc:
+        raise InputError(f"{path}: not a readable numpy array ({str(exc).splitlines()[0]})") from None
+    x0 = y0 = 0.0
+    if isinstance(data, np.lib.npyio.NpzFile):
+        keys = data.files
+        key = "elevation" if "elevation" in keys else (keys[0] if keys else None)
+        if key is None:
+            raise InputError(f"{path}: empty .npz archive")
+        z = data[key]
+        if cell_size is None and "cell_size" in keys:
+            cell_size = float(data["cell_size"])
+        x0 = float(data["x_origin"]) if "x_origin" in keys else 0.0
+        y0 = float(data["y_origin"]) if "y_origin" in keys else None
+        if crs is None and "crs" in keys:
+            crs = str(data["crs"])
+    else:
+        z, y0 = data, None
+    if not np.issubdtype(np.asarray(z).dtype, np.number) or np.ndim(z) != 2:
+        raise InputError(f"{path}: expected a 2-D numeric elevation array, got shape {np.shape(z)}")
+    if cell_size is None or not (cell_size > 0 and math.isfinite(cell_size)):
+        raise InputError(f"{path}: a numpy DEM needs a positive cell size (--cell-size METRES)")
+    z = np.asarray(z, dtype=np.float64)
+    if y0 is None:  # origin at the south-west corner of the grid
+        y0 = z.shape[0] * cell_size
+    transform = Affine(cell_size, 0.0, x0, 0.0, -cell_size, y0)
+    return _georeference(z, ~np.isfinite(z), transform, _crs_string(crs), os.path.basename(path), None)
+
+
+def _load_jacksboro(resolution: float | None) -> DEM:
+    """matplotlib's real 3-arc-second DEM of the Jacksboro fault, Tennessee.
+
+    Its rows run north to south; its ``ymin`` key holds the *northern* edge
+    (the keys are swapped) and the x/y keys are the outer edges of the grid.
+    """
+    from matplotlib import cbook
+
+    d = cbook.get_sample_data("jacksboro_fault_dem.npz")
+    z = d["elevation"].astype(np.float64)
+    north = max(float(d["ymin"]), float(d["ymax"]))
+    west = float(d["xmin"])
+    transform = Affine(float(d["dx"]), 0.0, west, 0.0, -float(d["dy"]), north)
+    return _georeference(z, np.zeros(z.shape, bool), transform, "EPSG:4326", "builtin:jacksboro", resolution)
+
+
+def _georeference(z, nodata, transform: Affine, crs: str | None, name: str, resolution: float | None) -> DEM:
+    """Repair the grid, then reproject it to UTM if its CRS is geographic."""
+    if z.ndim != 2 or min(z.shape) < 2:
+        raise InputError(f"{name}: a DEM needs at least 2 x 2 cells, got shape {z.shape}")
+    geographic = False
+    if crs is not None:
+        from pyproj import CRS
+
+        geographic = CRS.from_user_input(crs).is_geographic
+    if transform.b != 0 or transform.d != 0:
+        raise InputError(f"{name}: rotated grids are not supported")
+    if transform.e > 0:  # rows run south to north: flip to north-up
+        z, nodata = z[::-1], nodata[::-1]
+        transform = Affine(transform.a, 0, transform.c, 0, -transform.e, transform.f + transform.e * z.shape[0])
+    if geographic:
+        lat_mid = transform.f + transform.e * z.shape[0] / 2
+        cell_m = math.sqrt(abs(transform.a) * math.cos(math.radians(lat_mid)) * abs(transform.e)) * EARTH_METRES_PER_DEGREE
+    else:
+        cell_m = math.sqrt(abs(transform.a * transform.e))
+    fixed, report = repair_elevation(z, cell_m, nodata)
+    if not geographic:
+        return DEM(fixed, transform, crs, name, report)
+    return _reproject_to_utm(fixed, transform, crs, name, report, resolution)
+
+
+def _reproject_to_utm(z, transform: Affine, crs: str, name: str, report: RepairReport, resolution: float | None) -> DEM:
+    from pyproj import Transformer
+    from rasterio.warp import Resampling, reproject
+
+    rows, cols = z.shape
+    lon_c, lat_c = transform * (cols / 2, rows / 2)
+    dst_crs = f"EPSG:{utm_epsg(lon_c, lat_c)}"
+    to_utm = Transformer.from_crs(crs, dst_crs, always_xy=True)
+    if resolution is None:
+        dx_m = abs(transform.a) * math.cos(math.radians(lat_c)) * EARTH_METRES_PER_DEGREE
+        dy_m = abs(transform.e) * EARTH_METRES_PER_DEGREE
+        resolution = float(max(1.0, round(math.sqrt(dx_m * dy_m))))
+    # Inscribed rectangle: the tile's edges, densely sampled, bound the valid area.
+    # Inset by half a source cell: beyond the outer cell centres there is no data.
+    s = np.linspace(0.5, 0.5 + (max(rows, cols) - 1), 200)
+    sc, sr = np.clip(s, 0.5, cols - 0.5), np.clip(s, 0.5, rows - 0.5)
+    edges = {
+        "west": (np.full_like(sr, 0.5), sr), "east": (np.full_like(sr, cols - 0.5), sr),
+        "north": (sc, np.full_like(sc, 0.5)), "south": (sc, np.full_like(sc, rows - 0.5)),
+    }
+    xy = {k: to_utm.transform(*(transform * (c, r))) for k, (c, r) in edges.items()}
+    left, right = np.max(xy["west"][0]), np.min(xy["east"][0])
+    bottom, top = np.max(xy["south"][1]), np.min(xy["north"][1])
+    width, height = int((right - left) // resolution), int((top - bottom) // resolution)
+    if width < 2 or height < 2:
+        raise InputError(f"{name}: the DEM is too small to reproject to {dst_crs}")
+    dst_transform = Affine(resolution, 0.0, float(left), 0.0, -resolution, float(top))
+    dst = np.full((height, width), np.nan, dtype=np.float64)
+    reproject(z, dst, src_transform=transform, src_crs=crs, dst_transform=dst_transform, dst_crs=dst_crs,
+              resampling=Resampling.bilinear, src_nodata=np.nan, dst_nodata=np.nan)
+    dst, dst_transform = _trim_invalid_border(dst, dst_transform)
+    return DEM(dst, dst_transform, dst_crs, name, report)
+
+
+def _trim_invalid_border(z: np.ndarray, transform: Affine):
+    """Drop outer rows/columns holding NaN (resampling edge effects)."""
+    r0, r1, c0, c1 = 0, z.shape[0], 0, z.shape[1]
+    while r1 - r0 > 2 and c1 - c0 > 2:
+        block = z[r0:r1, c0:c1]
+        bad = [~np.isfinite(block[0]).all(), ~np.isfinite(block[-1]).all(),
+               ~np.isfinite(block[:, 0]).all(), ~np.isfinite(block[:, -1]).all()]
+        if not any(bad):
+            break
+        r0, r1, c0, c1 = r0 + bad[0], r1 - bad[1], c0 + bad[2], c1 - bad[3]
+    z = z[r0:r1, c0:c1]
+    if not np.isfinite(z).all():
+        raise InputError("reprojection left cells without data inside the grid")
+    return np.ascontiguousarray(z), transform * Affine.translation(c0, r0)
