@@ -1,0 +1,150 @@
+"""Rendered skylines: per-column binary search with ``scene.ray_test``.
+
+For every image column u = i + 0.5 we search the v where rays stop seeing
+sky and start hitting terrain (CONTRACT.md: NaN where the column sees only
+sky, 0 where terrain reaches the top edge). Seen from above the ground, a
+column's rays hit terrain below one boundary and miss above it, so a
+bisection finds it with ~15 ray tests instead of H.
+
+Modes: ``subpixel`` (continuous v, bisected to ``tol`` px, default 0.02) and
+integer (the top edge of the first row whose *centre* ray hits: exactly
+what a one-sample-per-pixel full render gives).
+
+Batched: one Dr.Jit kernel runs every column of every pose — thousands of
+poses per call. Pose values enter as array buffers, never literals, so a new
+pose does not recompile the kernel.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..camera import Intrinsics, as_pose_array, pixel_ray_basis
+from .terrain import Terrain
+
+#: Threads per kernel launch (poses x columns); bounds memory for huge batches.
+MAX_THREADS_PER_LAUNCH = 4_000_000
+
+
+def skyline_iterations(height: int, subpixel: bool, tol: float) -> int:
+    """Bisection steps to pin the boundary: to ``tol`` px, or to one row."""
+    if subpixel:
+        return max(1, math.ceil(math.log2(height / (2.0 * tol))))
+    return max(1, math.ceil(math.log2(height + 1)))
+
+
+def render_skylines(terrain: Terrain, poses, intrinsics: Intrinsics, *, subpixel: bool = True,
+                    tol: float = 0.02, per_pose_intrinsics=None) -> np.ndarray:
+    """Skylines of many poses.
+
+    Parameters
+    ----------
+    terrain : the Terrain scene (its curvature setting applies).
+    poses : Pose or (P, 6) array (x, y, z, pan, tilt, swing); world metres and degrees.
+    intrinsics : image size and default (f_px, cx, cy).
+    subpixel : continuous boundary (error <= tol px) or integer rows.
+    tol : sub-pixel tolerance in px.
+    per_pose_intrinsics : optional (P, 3) array of (f_px, cx, cy) overriding the default.
+
+    Returns
+    -------
+    (P, W) float64 skylines, v coordinates (px); (W,) for a single pose.
+    """
+    pa = as_pose_array(poses)
+    single = pa.ndim == 1
+    pa = np.atleast_2d(pa)
+    k = intrinsics.array() if per_pose_intrinsics is None else np.asarray(per_pose_intrinsics, np.float64)
+    d0, du, dv = pixel_ray_basis(pa, k)
+    origins, (d0, du, dv) = terrain.to_mesh_space(pa[:, :3], (d0, du, dv))
+    W, H = intrinsics.width, intrinsics.height
+    n_iter = skyline_iterations(H, subpixel, tol)
+    per_launch = max(1, MAX_THREADS_PER_LAUNCH // W)
+    out = np.empty((len(pa), W), dtype=np.float64)
+    for start in range(0, len(pa), per_launch):
+        sl = slice(start, start + per_launch)
+        basis = np.concatenate([origins[sl], d0[sl], du[sl], dv[sl]], axis=1)
+        kernel = _skyline_kernel if terrain.jit else _skyline_scalar
+        out[sl] = kernel(terrain, basis, W, H, subpixel, n_iter)
+    return out[0] if single else out
+
+
+def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixel: bool, n_iter: int):
+    """One Dr.Jit kernel: thread = (pose, column); a symbolic loop bisects v."""
+    import drjit as dr
+
+    mi = terrain.mi
+    P = len(basis)
+    buf = mi.Float(basis.astype(np.float32).ravel())
+    idx = dr.arange(mi.UInt32, P * W)
+    pose = idx // W
+    col = idx - pose * W
+
+    def g(j):
+        return dr.gather(mi.Float, buf, pose * 12 + j)
+
+    o = mi.Point3f(g(0), g(1), g(2))
+    du = mi.Vector3f(g(6), g(7), g(8))
+    dv = mi.Vector3f(g(9), g(10), g(11))
+    a = mi.Vector3f(g(3), g(4), g(5)) + (mi.Float(col) + 0.5) * du
+    maxt = dr.opaque(mi.Float, terrain.max_distance)
+
+    def hits(v):
+        return terrain.scene.ray_test(mi.Ray3f(o, dr.normalize(a + v * dv), maxt, 0.0, []))
+
+    n = dr.opaque(mi.UInt32, n_iter)
+    if subpixel:
+        top, bottom = hits(mi.Float(0.0)), hits(mi.Float(float(H)))
+        lo, hi = dr.zeros(mi.Float, P * W), dr.full(mi.Float, float(H), P * W)
+
+        def body(lo, hi, i):
+            mid = 0.5 * (lo + hi)
+            hit = hits(mid)
+            return dr.select(hit, lo, mid), dr.select(hit, mid, hi), i + 1
+
+        lo, hi, _ = dr.while_loop((lo, hi, dr.zeros(mi.UInt32, P * W)), lambda lo, hi, i: i < n, body)
+        result = dr.select(top, 0.0, dr.select(bottom, 0.5 * (lo + hi), dr.nan))
+    else:
+        lo, hi = dr.full(mi.Float, -1.0, P * W), dr.full(mi.Float, float(H), P * W)
+
+        def body(lo, hi, i):
+            mid = dr.floor(0.5 * (lo + hi))
+            hit = hits(mid + 0.5)
+            return dr.select(hit, lo, mid), dr.select(hit, mid, hi), i + 1
+
+        lo, hi, _ = dr.while_loop((lo, hi, dr.zeros(mi.UInt32, P * W)),
+                                  lambda lo, hi, i: (i < n) & (hi - lo > 1.0), body)
+        result = dr.select(hi >= float(H), dr.nan, hi)
+    return np.array(result, dtype=np.float64).reshape(P, W)
+
+
+def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixel: bool, n_iter: int):
+    """The same bisection in numpy for the scalar fallback variant (slow)."""
+    P = len(basis)
+    o = np.repeat(basis[:, 0:3], W, axis=0)
+    du = np.repeat(basis[:, 6:9], W, axis=0)
+    dv = np.repeat(basis[:, 9:12], W, axis=0)
+    a = np.repeat(basis[:, 3:6], W, axis=0) + (np.tile(np.arange(W), P) + 0.5)[:, None] * du
+
+    def hits(v):
+        return terrain.mesh_ray_test(o, a + np.asarray(v)[:, None] * dv)
+
+    n = P * W
+    if subpixel:
+        top, bottom = hits(np.zeros(n)), hits(np.full(n, float(H)))
+        lo, hi = np.zeros(n), np.full(n, float(H))
+        for _ in range(n_iter):
+            mid = 0.5 * (lo + hi)
+            hit = hits(mid)
+            lo, hi = np.where(hit, lo, mid), np.where(hit, mid, hi)
+        result = np.where(top, 0.0, np.where(bottom, 0.5 * (lo + hi), np.nan))
+    else:
+        lo, hi = np.full(n, -1.0), np.full(n, float(H))
+        for _ in range(n_iter):
+            active = hi - lo > 1.0
+            mid = np.floor(0.5 * (lo + hi))
+            hit = hits(mid + 0.5)
+            lo, hi = np.where(hit | ~active, lo, mid), np.where(hit & active, mid, hi)
+        result = np.where(hi >= H, np.nan, hi)
+    return result.reshape(P, W)
