@@ -58,6 +58,8 @@ class Terrain:
         cx, cy = dem.centre
         self.origin = np.array([cx, cy, 0.0])
         vertices, faces = terrain_mesh_arrays(dem, self.origin[:2], self.c)
+        self.faces = faces
+        self.vertices = vertices
         mi = self.mi
         mesh = mi.Mesh("terrain", len(vertices), len(faces), has_vertex_normals=False, has_vertex_texcoords=False)
         params = mi.traverse(mesh)
@@ -69,6 +71,17 @@ class Terrain:
         span = float(np.hypot(xmax - xmin, ymax - ymin))
         #: No ray needs to go further than this (metres): replaces the 10 km far clip.
         self.max_distance = 2.0 * span + 10_000.0
+
+    @property
+    def face_normals(self) -> np.ndarray:
+        """(F, 3) unit upward normals of the (unlowered) terrain triangles."""
+        if not hasattr(self, "_face_normals"):
+            v = self.vertices.astype(np.float64)
+            v[:, 2] += self.c * (v[:, 0] ** 2 + v[:, 1] ** 2)  # undo the mesh lowering
+            a, b, c = v[self.faces[:, 0]], v[self.faces[:, 1]], v[self.faces[:, 2]]
+            n = np.cross(b - a, c - a)
+            self._face_normals = n / np.linalg.norm(n, axis=1, keepdims=True)
+        return self._face_normals
 
     # --- coordinate frames ---------------------------------------------------------
     def to_mesh_space(self, origins, vectors=(), viewer_xy=None):
@@ -132,9 +145,10 @@ class Terrain:
         norm = np.linalg.norm(d, axis=-1)
         d = d / norm[:, None]
         if self.jit:
-            si = self.scene.ray_intersect(self._rays(o, d))
-            t = np.array(si.t, dtype=np.float64)
-            n = np.stack([np.array(si.n.x), np.array(si.n.y), np.array(si.n.z)], axis=1).astype(np.float64)
+            pi = self.scene.ray_intersect_preliminary(self._rays(o, d))
+            t = np.array(pi.t, dtype=np.float64)
+            face = np.array(pi.prim_index, dtype=np.int64)
+            n = self.face_normals[np.clip(face, 0, len(self.face_normals) - 1)]
         else:
             t, n = self._scalar_loop(o, d, None, "ray_intersect")
         hit = np.isfinite(t) & (t < self.max_distance)
