@@ -59,7 +59,7 @@ class Pose:
 
     def normalized(self) -> "Pose":
         """Same pose with pan in [0, 360) and swing in (-180, 180]."""
-        swing = -((-self.swing + 180.0) % 360.0 - 180.0)
+        swing = -((-self.swing + 180.0) % 360.0 - 180.0) + 0.0  # + 0.0: no -0.0
         return Pose(self.x, self.y, self.z, self.pan % 360.0, self.tilt, swing)
 
 

@@ -155,6 +155,26 @@ class DEM:
         """(lon, lat) in degrees, WGS 84 -> world (x, y)."""
         return self._from_lonlat.transform(np.asarray(lon, float), np.asarray(lat, float))
 
+    def camera_pose(self, x: float, y: float, height: float, pan: float, tilt: float, swing: float):
+        """The :class:`~skyrender.camera.Pose` of a camera ``height`` metres above the
+        ground at (x, y), z = g(x, y) + height; InputError outside the DEM."""
+        from ..camera import Pose
+
+        for name, value in (("x", x), ("y", y), ("height", height), ("pan", pan), ("tilt", tilt), ("swing", swing)):
+            if not np.isfinite(value):
+                raise InputError(f"{name} must be a finite number, got {value}")
+        if height < 0:
+            raise InputError(f"camera height above ground must be >= 0 m, got {height}")
+        if not -90.0 <= tilt <= 90.0:
+            raise InputError(f"tilt must lie in [-90, 90] degrees, got {tilt}")
+        if not bool(self.contains(x, y)):
+            xmin, xmax, ymin, ymax = self.extent
+            raise InputError(
+                f"camera position ({x:.1f}, {y:.1f}) lies outside the DEM "
+                f"(x {xmin:.1f} .. {xmax:.1f}, y {ymin:.1f} .. {ymax:.1f}, {self.crs or 'local frame'})"
+            )
+        return Pose(x, y, float(self.ground(x, y)) + height, pan, tilt, swing).normalized()
+
     def fingerprint(self) -> str:
         """Stable hash of elevations, grid and CRS (to refuse mismatched models)."""
         h = hashlib.sha256()

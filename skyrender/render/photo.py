@@ -27,7 +27,7 @@ class Look:
     sun_azimuth: float = 135.0
     sun_elevation: float = 35.0
     haze_distance: float = 40_000.0  # e-folding distance of aerial perspective
-    snowline: float | None = None  # elevation above which gentle slopes are snow; None: 85th percentile
+    snowline: float | None = None  # gentle slopes above it are snow; None: the higher of 2400 m and the 85th percentile
     noise: float = 0.0  # std of Gaussian sensor noise, in [0, 1] intensity units
     occluders: float = 0.0  # share of columns covered by foreground trees/posts
     supersample: int = 2  # samples per pixel side
@@ -166,7 +166,7 @@ def render_photo(terrain: Terrain, pose: Pose, intrinsics: Intrinsics, look: Loo
     colour = _sky(dirs, look, sun)
     if hit.any():
         z = terrain.dem.elevation
-        snowline = float(np.quantile(z, 0.85)) if look.snowline is None else look.snowline
+        snowline = max(2400.0, float(np.quantile(z, 0.85))) if look.snowline is None else look.snowline
         p, n = points[hit], normals[hit]
         lit = np.clip(n @ sun, 0, None)
         shadow_from = p + 0.5 * n

@@ -1,0 +1,179 @@
+"""The ``skyrender`` command line (CONTRACT.md).
+
+Every command prints a one-line error on stderr and exits with status 2 on
+bad input; ``--json`` prints exactly one JSON object on stdout.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from .errors import InputError
+
+app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
+                  help="Camera pose from one mountain photograph and a DEM.")
+
+DemOpt = typer.Option(..., "--dem", help="DEM file (GeoTIFF, .hgt, .asc, .npy/.npz) or builtin:jacksboro")
+CrsOpt = typer.Option(None, "--crs", help="CRS of a DEM file that has none, e.g. EPSG:31254")
+CellOpt = typer.Option(None, "--cell-size", help="metres per cell, for .npy/.npz DEMs")
+VariantOpt = typer.Option(None, "--variant", help="Mitsuba variant (default $SKYRENDER_VARIANT or llvm_ad_rgb)")
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """'640x480' -> (640, 480); InputError otherwise."""
+    try:
+        w, h = (int(p) for p in text.lower().split("x"))
+    except ValueError:
+        raise InputError(f"--size must look like WIDTHxHEIGHT (e.g. 640x480), got {text!r}") from None
+    if not (2 <= w <= 16384 and 2 <= h <= 16384):
+        raise InputError(f"--size must be between 2x2 and 16384x16384, got {text!r}")
+    return w, h
+
+
+def emit_json(obj: dict) -> None:
+    sys.stdout.write(json.dumps(obj) + "\n")
+
+
+@app.command()
+def render(
+    dem: str = DemOpt,
+    x: Optional[float] = typer.Option(None, "--x", help="camera easting in the world frame (m)"),
+    y: Optional[float] = typer.Option(None, "--y", help="camera northing in the world frame (m)"),
+    lat: Optional[float] = typer.Option(None, "--lat", help="camera latitude (deg), instead of --y"),
+    lon: Optional[float] = typer.Option(None, "--lon", help="camera longitude (deg), instead of --x"),
+    height: float = typer.Option(..., "--height", help="camera height above ground (m)"),
+    pan: float = typer.Option(..., "--pan", help="heading, degrees clockwise from grid north"),
+    tilt: float = typer.Option(..., "--tilt", help="elevation of the optical axis, degrees"),
+    swing: float = typer.Option(..., "--swing", help="roll about the optical axis, degrees"),
+    fov: float = typer.Option(..., "--fov", help="horizontal field of view, degrees"),
+    size: str = typer.Option(..., "--size", help="WIDTHxHEIGHT in pixels"),
+    out: Path = typer.Option(..., "--out", help="output image (.png, .jpg)"),
+    skyline_out: Optional[Path] = typer.Option(None, "--skyline-out", help="write the skyline (.npy or .json)"),
+    overlay: Optional[Path] = typer.Option(None, "--overlay", help="also write the image with its skyline drawn"),
+    flat_earth: bool = typer.Option(False, "--flat-earth", help="no earth curvature or refraction"),
+    json_out: bool = typer.Option(False, "--json", help="print the pose as one JSON object"),
+    crs: Optional[str] = CrsOpt,
+    cell_size: Optional[float] = CellOpt,
+    sun_azimuth: float = typer.Option(135.0, help="sun azimuth, degrees clockwise from north"),
+    sun_elevation: float = typer.Option(35.0, help="sun elevation, degrees"),
+    haze: float = typer.Option(40_000.0, help="aerial-perspective e-folding distance (m)"),
+    noise: float = typer.Option(0.0, help="sensor noise std, 0..1"),
+    occluders: float = typer.Option(0.0, help="share of columns covered by foreground trees/posts, 0..1"),
+    supersample: int = typer.Option(2, help="samples per pixel side (anti-aliasing)"),
+    seed: int = typer.Option(0, help="seed for texture, noise and occluders"),
+    variant: Optional[str] = VariantOpt,
+):
+    """Render a realistic photograph of the terrain from a pose."""
+    from .camera import Intrinsics
+    from .dem import load_dem
+    from .io import save_skyline
+    from .render import Terrain
+    from .render.photo import Look, render_photo
+    from .viz import draw_skyline, write_image
+
+    width, height_px = parse_size(size)
+    intrinsics = Intrinsics.from_fov(fov, width, height_px)
+    for name, value, lo, hi in (("--noise", noise, 0, 1), ("--occluders", occluders, 0, 1),
+                                ("--supersample", supersample, 1, 8), ("--haze", haze, 1e-6, float("inf"))):
+        if not lo <= value <= hi:
+            raise InputError(f"{name} must lie in [{lo}, {hi}], got {value}")
+    _check_writable(out, "--out")
+    terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
+    if (lat is None) != (lon is None) or (lat is not None and (x is not None or y is not None)):
+        raise InputError("give the position as --x and --y, or as --lat and --lon")
+    if lat is not None:
+        x, y = (float(v) for v in terrain_dem.from_lonlat(lon, lat))
+    if x is None or y is None:
+        raise InputError("missing camera position: give --x and --y (or --lat and --lon)")
+    pose = terrain_dem.camera_pose(x, y, height, pan, tilt, swing)
+    terrain = Terrain(terrain_dem, curvature=not flat_earth, variant=variant)
+    look = Look(sun_azimuth=sun_azimuth, sun_elevation=sun_elevation, haze_distance=haze, noise=noise,
+                occluders=occluders, supersample=supersample, seed=seed)
+    photo = render_photo(terrain, pose, intrinsics, look)
+    write_image(out, photo.image)
+    if overlay is not None:
+        write_image(overlay, draw_skyline(photo.image, photo.skyline))
+    if skyline_out is not None:
+        save_skyline(skyline_out, photo.skyline)
+    result = {"x": pose.x, "y": pose.y, "z": pose.z, "pan": pose.pan, "tilt": pose.tilt, "swing": pose.swing,
+              "fov": intrinsics.fov, "width": width, "height": height_px, "crs": terrain_dem.crs}
+    if json_out:
+        emit_json(result)
+    else:
+        typer.echo(f"rendered {out} ({width}x{height_px}) from x={pose.x:.1f} y={pose.y:.1f} z={pose.z:.1f} "
+                   f"pan={pose.pan:.2f} tilt={pose.tilt:.2f} swing={pose.swing:.2f} fov={intrinsics.fov:.2f}")
+
+
+def _check_writable(path: Path, option: str) -> None:
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(f"{option}: directory {parent} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise InputError(f"{option}: directory {parent} is not writable")
+
+
+def _click_classes(name: str) -> tuple[type, ...]:
+    """The click exception class ``name`` from click and from typer's vendored copy."""
+    import importlib
+
+    found = []
+    for module in ("click.exceptions", "typer._click.exceptions"):
+        try:
+            found.append(getattr(importlib.import_module(module), name))
+        except (ImportError, AttributeError):
+            pass
+    return tuple(found)
+
+
+@app.callback()
+def _root() -> None:
+    """Camera pose from one mountain photograph and a DEM."""
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point: run the app, turning bad input into one line and exit status 2."""
+    command = typer.main.get_command(app)
+    try:
+        rv = command.main(args=argv, prog_name="skyrender", standalone_mode=False)
+        return int(rv) if isinstance(rv, int) else 0
+    except InputError as exc:
+        _fail(str(exc))
+        return 2
+    except _click_classes("Exit") as exc:
+        return exc.exit_code
+    except _click_classes("ClickException") as exc:  # usage errors: missing option, bad number, ...
+        if exc.format_message():  # (no arguments at all: the help was printed)
+            _fail(exc.format_message())
+        return 2
+    except _click_classes("Abort"):
+        _fail("aborted")
+        return 1
+    except KeyboardInterrupt:
+        _fail("interrupted")
+        return 130
+    except Exception as exc:  # a bug: still one line, the traceback on request
+        if os.environ.get("SKYRENDER_DEBUG"):
+            raise
+        _fail(f"internal error: {type(exc).__name__}: {exc} (set SKYRENDER_DEBUG=1 for the traceback)")
+        return 1
+
+
+def _fail(message: str) -> None:
+    first = " ".join(str(message).split())
+    print(f"skyrender: error: {first}", file=sys.stderr)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
+
+
+def run() -> None:
+    """Console-script wrapper: exit with :func:`main`'s status."""
+    sys.exit(main())
