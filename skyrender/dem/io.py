@@ -171,7 +171,7 @@ def _reproject_to_utm(z, transform: Affine, crs: str, name: str, report: RepairR
     from rasterio.warp import Resampling, reproject
 
     rows, cols = z.shape
-    lon_c, lat_c = transform * (cols / 2, rows / 2)
+    lon_c, lat_c = transform @ (cols / 2, rows / 2)
     dst_crs = f"EPSG:{utm_epsg(lon_c, lat_c)}"
     to_utm = Transformer.from_crs(crs, dst_crs, always_xy=True)
     if resolution is None:
@@ -186,7 +186,7 @@ def _reproject_to_utm(z, transform: Affine, crs: str, name: str, report: RepairR
         "west": (np.full_like(sr, 0.5), sr), "east": (np.full_like(sr, cols - 0.5), sr),
         "north": (sc, np.full_like(sc, 0.5)), "south": (sc, np.full_like(sc, rows - 0.5)),
     }
-    xy = {k: to_utm.transform(*(transform * (c, r))) for k, (c, r) in edges.items()}
+    xy = {k: to_utm.transform(*(transform @ (c, r))) for k, (c, r) in edges.items()}
     left, right = np.max(xy["west"][0]), np.min(xy["east"][0])
     bottom, top = np.max(xy["south"][1]), np.min(xy["north"][1])
     width, height = int((right - left) // resolution), int((top - bottom) // resolution)
@@ -213,4 +213,4 @@ def _trim_invalid_border(z: np.ndarray, transform: Affine):
     z = z[r0:r1, c0:c1]
     if not np.isfinite(z).all():
         raise InputError("reprojection left cells without data inside the grid")
-    return np.ascontiguousarray(z), transform * Affine.translation(c0, r0)
+    return np.ascontiguousarray(z), transform @ Affine.translation(c0, r0)
