@@ -170,10 +170,10 @@ def _fail(message: str) -> None:
     print(f"skyrender: error: {first}", file=sys.stderr)
 
 
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
-
-
 def run() -> None:
     """Console-script wrapper: exit with :func:`main`'s status."""
     sys.exit(main())
+
+
+if __name__ == "__main__":  # pragma: no cover
+    run()

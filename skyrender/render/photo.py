@@ -113,7 +113,7 @@ def _occluders(W: int, H: int, s: int, skyline: np.ndarray, look: Look):
     """Foreground trees/posts: (coverage mask on the sample grid, colour, top edge per column).
 
     Each occluder rises 6-50 px above the local skyline; they are added until
-    ``look.occluders`` of the columns are covered.
+    ``look.occluders`` of the columns have their skyline hidden.
     """
     rng = np.random.default_rng(look.seed + 7919)
     mask = np.zeros((H * s, W * s), dtype=bool)
@@ -124,7 +124,7 @@ def _occluders(W: int, H: int, s: int, skyline: np.ndarray, look: Look):
     vv = (np.arange(H * s) + 0.5) / s
     ground = np.where(np.isfinite(skyline), skyline, H * 0.6)
     for _ in range(200):
-        if np.isfinite(top).sum() >= target:
+        if np.sum(top < ground) >= target:
             break
         centre = rng.uniform(0, W)
         i = int(np.clip(centre, 0, W - 1))

@@ -157,7 +157,8 @@ class Terrain:
         with np.errstate(invalid="ignore"):
             seen = np.asarray(origins, dtype=np.float64) + t[:, None] * dirs
         viewer = np.asarray(origins, dtype=np.float64)[:, :2] if viewer_xy is None else np.asarray(viewer_xy)
-        seen[:, 2] += self.c * np.sum((seen[:, :2] - viewer) ** 2, axis=-1)
+        if self.c:
+            seen[hit, 2] += self.c * np.sum((seen[hit, :2] - viewer[hit]) ** 2, axis=-1)
         n = np.where(hit[:, None], n, np.nan)
         return t, seen, n
 

@@ -1,0 +1,104 @@
+"""The command line of CONTRACT.md: outputs, JSON, and one-line errors with exit 2."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from skyrender.cli import main
+from skyrender.io import load_skyline
+
+from .conftest import data_path
+
+RENDER = ["render", "--height", "2", "--pan", "40", "--tilt", "4", "--swing", "0", "--fov", "60",
+          "--size", "160x120"]
+
+
+def tujunga_args(tujunga_view):
+    pose, _ = tujunga_view
+    return ["--dem", str(data_path("dem", "srtm_bigtujunga30m_utm11.tif")), "--x", str(pose.x), "--y", str(pose.y)]
+
+
+def test_render_writes_image_skyline_and_json(tmp_path, capsys, tujunga_view):
+    out, sky = tmp_path / "view.png", tmp_path / "sky.npy"
+    code = main(RENDER + tujunga_args(tujunga_view) + ["--out", str(out), "--skyline-out", str(sky), "--json"])
+    assert code == 0
+    captured = capsys.readouterr()
+    result = json.loads(captured.out)  # exactly one JSON object on stdout
+    assert set(result) == {"x", "y", "z", "pan", "tilt", "swing", "fov", "width", "height", "crs"}
+    assert result["crs"] == "EPSG:32611" and result["width"] == 160 and result["height"] == 120
+    assert result["fov"] == pytest.approx(60)
+    pose, _ = tujunga_view
+    assert result["z"] == pytest.approx(pose.z)
+    import cv2
+
+    img = cv2.imread(str(out))
+    assert img.shape == (120, 160, 3)
+    skyline = load_skyline(sky)
+    assert skyline.shape == (160,) and skyline.dtype == np.float64
+    assert np.isfinite(skyline).mean() > 0.9
+
+
+def test_render_accepts_lat_lon_and_json_skylines(tmp_path, capsys, tujunga_dem, tujunga_view):
+    pose, _ = tujunga_view
+    lon, lat = tujunga_dem.to_lonlat(pose.x, pose.y)
+    out, sky = tmp_path / "view.png", tmp_path / "sky.json"
+    args = RENDER + ["--dem", str(data_path("dem", "srtm_bigtujunga30m_utm11.tif")), "--lat", str(lat),
+                     "--lon", str(lon), "--out", str(out), "--skyline-out", str(sky), "--json"]
+    assert main(args) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["x"] == pytest.approx(pose.x, abs=1e-3) and result["y"] == pytest.approx(pose.y, abs=1e-3)
+    data = json.loads(sky.read_text())
+    assert len(data) == 160 and all(v is None or isinstance(v, float) for v in data)
+
+
+def _bad(capsys, args):
+    code = main(args)
+    err = capsys.readouterr().err
+    return code, err
+
+
+@pytest.mark.parametrize("case", ["missing", "text", "negative_fov", "outside", "bad_size", "no_position"])
+def test_bad_input_gives_one_line_and_exit_2(case, tmp_path, capsys, tujunga_view):
+    text = tmp_path / "notes.tif"
+    text.write_text("this is not a DEM\n")
+    args = RENDER + tujunga_args(tujunga_view) + ["--out", str(tmp_path / "x.png")]
+    if case == "missing":
+        args[args.index("--dem") + 1] = str(tmp_path / "nope.tif")
+    elif case == "text":
+        args[args.index("--dem") + 1] = str(text)
+    elif case == "negative_fov":
+        args[args.index("--fov") + 1] = "-60"
+    elif case == "outside":
+        args[args.index("--x") + 1] = "0"
+    elif case == "bad_size":
+        args[args.index("--size") + 1] = "big"
+    elif case == "no_position":
+        i = args.index("--x")
+        del args[i : i + 4]
+    code, err = _bad(capsys, args)
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("skyrender: error:")
+    assert "Traceback" not in err
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_unwritable_output_is_bad_input(capsys, tujunga_view, tmp_path):
+    args = RENDER + tujunga_args(tujunga_view) + ["--out", str(tmp_path / "no" / "such" / "dir" / "x.png")]
+    code, err = _bad(capsys, args)
+    assert code == 2 and "does not exist" in err
+
+
+def test_installed_console_script_exits_2_on_a_missing_dem(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "skyrender.cli", "render", "--dem", str(tmp_path / "none.tif"),
+                           "--x", "0", "--y", "0", "--height", "2", "--pan", "0", "--tilt", "0", "--swing", "0",
+                           "--fov", "60", "--size", "64x48", "--out", str(tmp_path / "a.png")],
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    assert proc.stderr.strip().count("\n") == 0 and "not found" in proc.stderr

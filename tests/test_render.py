@@ -1,0 +1,211 @@
+"""The Mitsuba renderer against independent computations."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from affine import Affine
+
+from skyrender.camera import Intrinsics, Pose, camera_axes, mitsuba_to_world, pixel_directions, project
+from skyrender.dem import DEM, load_dem
+from skyrender.render import Terrain, render_skylines
+from skyrender.render.photo import Look, cast_pixel_rays, render_photo
+from skyrender.render.visibility import line_of_sight
+
+from .conftest import data_path
+
+
+def first_hit_rows(t: np.ndarray) -> np.ndarray:
+    """Skyline of a one-sample-per-pixel full render: the first terrain row per column."""
+    hit = np.isfinite(t)
+    rows = np.argmax(hit, axis=0).astype(float)
+    rows[~hit.any(axis=0)] = np.nan
+    return rows
+
+
+@pytest.mark.parametrize("curved", [True, False])
+def test_ray_hits_project_back_to_their_pixels(curved, tujunga_terrain, tujunga_terrain_flat, tujunga_view):
+    terrain = tujunga_terrain if curved else tujunga_terrain_flat
+    pose, K = tujunga_view
+    t, points, _, _ = cast_pixel_rays(terrain, pose, K, supersample=1)
+    hit = np.isfinite(t)
+    assert 0.2 < hit.mean() < 0.95  # both terrain and sky in view
+    v, u = np.nonzero(hit)
+    uv, ok = project(points[hit], pose, K, curvature=curved)
+    assert ok.all()
+    err = np.hypot(uv[:, 0] - (u + 0.5), uv[:, 1] - (v + 0.5))
+    assert err.max() < 0.01
+    # and the hit points lie on the terrain surface g(x, y) (float32 mesh: millimetres)
+    g = terrain.dem.ground(points[hit, 0], points[hit, 1])
+    assert np.nanmax(np.abs(points[hit, 2] - g)) < 0.05
+
+
+def test_integer_skyline_equals_the_full_render(tujunga_terrain, tujunga_view):
+    pose, K = tujunga_view
+    t, _, _, _ = cast_pixel_rays(tujunga_terrain, pose, K, supersample=1)
+    full = first_hit_rows(t)
+    bisected = render_skylines(tujunga_terrain, pose, K, subpixel=False)
+    np.testing.assert_array_equal(bisected, full)
+
+
+def test_subpixel_skyline_brackets_the_boundary_within_tolerance(tujunga_terrain, tujunga_view):
+    pose, K = tujunga_view
+    sky = render_skylines(tujunga_terrain, pose, K, subpixel=True, tol=0.02)
+    inner = np.isfinite(sky) & (sky > 0.1) & (sky < K.height - 0.1)
+    assert inner.mean() > 0.9
+    u = np.arange(K.width)[inner] + 0.5
+    origin = np.broadcast_to(pose.array()[:3], (inner.sum(), 3))
+    above = tujunga_terrain.ray_test(origin, pixel_directions(u, sky[inner] - 0.05, pose, K))
+    below = tujunga_terrain.ray_test(origin, pixel_directions(u, sky[inner] + 0.05, pose, K))
+    assert not above.any() and below.all()
+    integer = render_skylines(tujunga_terrain, pose, K, subpixel=False)
+    assert np.nanmax(np.abs(sky - integer)) <= 1.0
+
+
+def test_batched_skylines_equal_one_by_one(tujunga_terrain, tujunga_view):
+    pose, K = tujunga_view
+    poses = np.tile(pose.array(), (5, 1))
+    poses[:, 3] += np.arange(5) * 7.0
+    poses[:, 5] = [-10, -3, 0, 4, 10]
+    batch = render_skylines(tujunga_terrain, poses, K)
+    for i in range(5):
+        np.testing.assert_allclose(batch[i], render_skylines(tujunga_terrain, Pose.from_array(poses[i]), K),
+                                   atol=1e-4, equal_nan=True)
+
+
+def test_positive_tilt_moves_the_skyline_down(tujunga_terrain, tujunga_view):
+    pose, K = tujunga_view
+    s0 = render_skylines(tujunga_terrain, pose, K)
+    tilted = Pose(pose.x, pose.y, pose.z, pose.pan, pose.tilt + 3.0, pose.swing)
+    s3 = render_skylines(tujunga_terrain, tilted, K)
+    assert np.nanmedian(s3 - s0) == pytest.approx(K.f_px * np.tan(np.radians(3)), rel=0.05)
+
+
+def _single_mountain_dem():
+    """Flat plain at 0 m with one Gaussian mountain at (5000, 9000): 200 x 200 cells of 50 m."""
+    y, x = np.mgrid[0:200, 0:200]
+    xc, yc = (x + 0.5) * 50, 10_000 - (y + 0.5) * 50
+    z = 1500.0 * np.exp(-((xc - 5000) ** 2 + (yc - 9000) ** 2) / (2 * 400.0**2))
+    return DEM(z, Affine(50, 0, 0, 0, -50, 10_000), None, "one-mountain")
+
+
+def test_pan_zero_looks_north_at_the_mountain():
+    dem = _single_mountain_dem()
+    terrain = Terrain(dem, curvature=False)
+    K = Intrinsics.from_fov(40, 200, 150)
+    north = render_skylines(terrain, dem.camera_pose(5000, 2000, 2, 0, 0, 0), K)
+    south = render_skylines(terrain, dem.camera_pose(5000, 2000, 2, 180, 0, 0), K)
+    assert np.nanargmin(north) in (99, 100)  # the summit in the middle column
+    assert np.nanmin(north) < 75 - 50  # well above the horizon row
+    assert np.nanmin(south) > 74  # only flat plain behind: the horizon, no mountain
+
+
+def test_positive_swing_turns_the_rendered_horizon_counter_clockwise():
+    dem = _single_mountain_dem()
+    terrain = Terrain(dem, curvature=False)
+    K = Intrinsics.from_fov(40, 200, 150)
+    sky = render_skylines(terrain, dem.camera_pose(5000, 500, 50, 180, 0, 8), K)  # flat plain horizon
+    u = np.arange(200) + 0.5
+    slope = np.polyfit(u[np.isfinite(sky)], sky[np.isfinite(sky)], 1)[0]
+    assert slope < 0  # v falls to the right: counter-clockwise
+    assert np.degrees(np.arctan(-slope)) == pytest.approx(8, abs=0.3)
+
+
+def test_curvature_lowers_a_distant_ridge_by_the_formula():
+    # A flat plain at 0 with an east-west wall 300 m high, 20 km north of the camera.
+    rows, cols = 500, 100
+    z = np.zeros((rows, cols))
+    z[:40, :] = 300.0  # the northern 2 km: a plateau whose edge is the wall
+    dem = DEM(z, Affine(50, 0, 0, 0, -50, rows * 50), None, "wall")
+    edge_y = dem.y_centres[39]
+    K = Intrinsics.from_fov(20, 101, 101)
+    results = {}
+    for curved in (True, False):
+        terrain = Terrain(dem, curvature=curved)
+        pose = dem.camera_pose(2500, edge_y - 20_000, 10, 0, 0, 0)
+        sky = render_skylines(terrain, pose, K)
+        expected, _ = project([[2500, edge_y, 300.0]], pose, K, curvature=curved)
+        assert sky[50] == pytest.approx(expected[0, 1], abs=0.05)
+        results[curved] = sky[50]
+    drop_px = K.f_px * (20_000**2 * 0.87 / (2 * 6_371_000)) / 20_000
+    assert results[True] - results[False] == pytest.approx(drop_px, abs=0.05)
+
+
+def test_a_spike_in_the_dem_renders_no_phantom_ridge(tmp_path, tujunga_view):
+    pose, K = tujunga_view
+    dem = load_dem(data_path("dem", "srtm_bigtujunga30m_utm11.tif"))
+    # put a 32767 cell 3 km in front of the camera
+    _, _, f = camera_axes(pose.pan, 0, 0)
+    col, row = (int(v) for v in dem.fractional_index(pose.x + 3000 * f[0], pose.y + 3000 * f[1]))
+    z = dem.elevation.copy()
+    z[row, col] = 32767
+    path = tmp_path / "spiked.npz"
+    np.savez(path, elevation=z, cell_size=30.0, x_origin=dem.transform.c, y_origin=dem.transform.f,
+             crs=dem.crs)
+    spiked = load_dem(path)
+    assert spiked.repair.spikes_repaired == 1
+    clean_sky = render_skylines(Terrain(dem), pose, K)
+    spiked_sky = render_skylines(Terrain(spiked), pose, K)
+    assert np.nanmax(np.abs(clean_sky - spiked_sky)) < 1.0
+    # without the repair the spike is a tower reaching the top of the image
+    raw = DEM(z, dem.transform, dem.crs, "raw")
+    raw_sky = render_skylines(Terrain(raw), pose, K)
+    assert np.nanmin(raw_sky) < np.nanmin(clean_sky) - 20
+
+
+def test_mitsuba_camera_frame_matches_the_contract_rays(tujunga_terrain):
+    mi = tujunga_terrain.mi
+    pose = Pose(10.0, 20.0, 30.0, 220.0, 6.0, -9.0)
+    K = Intrinsics.from_fov(55, 320, 240)
+    sensor = mi.load_dict({
+        "type": "perspective", "fov": K.fov, "fov_axis": "x",
+        "to_world": mi.ScalarTransform4f(mitsuba_to_world(pose).tolist()),
+        "film": {"type": "hdrfilm", "width": K.width, "height": K.height},
+    })
+    rng = np.random.default_rng(5)
+    u, v = rng.uniform(0, 320, 50), rng.uniform(0, 240, 50)
+    film = mi.Point2f(mi.Float(u / K.width), mi.Float(v / K.height))
+    ray, _ = sensor.sample_ray(mi.Float(0.0), mi.Float(0.5), film, mi.Point2f(0.5, 0.5))
+    d_mi = np.stack([np.array(ray.d.x), np.array(ray.d.y), np.array(ray.d.z)], 1)
+    np.testing.assert_allclose(d_mi, pixel_directions(u, v, pose, K), atol=1e-5)
+    o_mi = np.stack([np.array(ray.o.x), np.array(ray.o.y), np.array(ray.o.z)], 1)
+    # Mitsuba starts its rays on the near clip plane (0.01 m ahead): on the same line
+    np.testing.assert_allclose(o_mi, pose.array()[:3] + 0.01 * d_mi / (d_mi @ camera_axes(220, 6, -9)[2])[:, None],
+                               atol=1e-4)
+
+
+def test_line_of_sight_agrees_with_sampling_the_ground(tujunga_dem, tujunga_terrain_flat):
+    dem = tujunga_dem
+    rng = np.random.default_rng(7)
+    xmin, xmax, ymin, ymax = dem.extent
+    n = 300
+    ax, bx = rng.uniform(xmin + 100, xmax - 100, (2, n))
+    ay, by = rng.uniform(ymin + 100, ymax - 100, (2, n))
+    a = np.column_stack([ax, ay, dem.ground(ax, ay) + rng.uniform(2, 300, n)])
+    b = np.column_stack([bx, by, dem.ground(bx, by) + rng.uniform(2, 300, n)])
+    clear = line_of_sight(tujunga_terrain_flat, a, b, lift_m=0.0, end_margin_m=0.0)
+    s = np.linspace(0, 1, 4000)[None, :, None]
+    seg = a[:, None, :] + s * (b - a)[:, None, :]
+    gap = seg[..., 2] - dem.ground(seg[..., 0], seg[..., 1])
+    brute = np.nanmin(gap, axis=1) > 0
+    clear_margin = np.abs(np.nanmin(gap, axis=1)) > 1.0  # leave out grazing segments
+    assert 0.1 < brute.mean() < 0.9  # both outcomes occur
+    np.testing.assert_array_equal(clear[clear_margin], brute[clear_margin])
+
+
+def test_photo_is_deterministic_and_its_skyline_is_the_sky_boundary(tujunga_terrain, tujunga_view):
+    pose, K = tujunga_view
+    look = Look(noise=0.02, occluders=0.2, seed=11)
+    a = render_photo(tujunga_terrain, pose, K, look)
+    b = render_photo(tujunga_terrain, pose, K, look)
+    np.testing.assert_array_equal(a.image, b.image)
+    assert a.image.shape == (K.height, K.width, 3) and a.image.dtype == np.uint8
+    occluded = a.sky_boundary < a.skyline - 0.5
+    assert 0.15 < occluded.mean() < 0.6
+    # sky pixels are bright and bluish, terrain pixels darker
+    rows = np.arange(K.height)[:, None]
+    sky = rows < np.nan_to_num(a.sky_boundary, nan=K.height)[None, :] - 2
+    ground = rows > np.nan_to_num(a.sky_boundary, nan=K.height)[None, :] + 2
+    img = a.image.astype(float)
+    assert img[sky].mean() > img[ground].mean() + 30
+    assert (img[sky][:, 2] > img[sky][:, 0]).mean() > 0.95
