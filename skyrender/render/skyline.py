@@ -6,7 +6,7 @@ sky, 0 where terrain reaches the top edge). Seen from above the ground, a
 column's rays hit terrain below one boundary and miss above it, so a
 bisection finds it with ~15 ray tests instead of H.
 
-Modes: ``subpixel`` (continuous v, bisected to ``tol`` px, default 0.02) and
+Modes: ``subpixel`` (continuous v, bisected until the error is at most ``tol`` px, default 0.05) and
 integer (the top edge of the first row whose *centre* ray hits: exactly
 what a one-sample-per-pixel full render gives).
 
@@ -36,7 +36,7 @@ def skyline_iterations(height: int, subpixel: bool, tol: float) -> int:
 
 
 def render_skylines(terrain: Terrain, poses, intrinsics: Intrinsics, *, subpixel: bool = True,
-                    tol: float = 0.02, per_pose_intrinsics=None) -> np.ndarray:
+                    tol: float = 0.05, per_pose_intrinsics=None) -> np.ndarray:
     """Skylines of many poses.
 
     Parameters
