@@ -111,6 +111,67 @@ def render(
                    f"pan={pose.pan:.2f} tilt={pose.tilt:.2f} swing={pose.swing:.2f} fov={intrinsics.fov:.2f}")
 
 
+@app.command()
+def model(
+    dem: str = typer.Argument(..., help="DEM file (GeoTIFF, .hgt, .asc, .npy/.npz) or builtin:jacksboro"),
+    out: Path = typer.Option(..., "--out", help="model directory to write"),
+    major_radius: float = typer.Option(1800.0, help="a major peak is the highest within this radius (m)"),
+    minor_radius: float = typer.Option(650.0, help="a minor peak is the highest within this radius (m)"),
+    min_prominence: float = typer.Option(0.0, help="drop feature points less prominent than this (m)"),
+    k: int = typer.Option(15, "--k", help="nearest feature points kept per pivot"),
+    spacing: float = typer.Option(1000.0, help="co-visibility viewpoint grid spacing (m)"),
+    camera_height: float = typer.Option(2.0, help="camera height above ground for co-visibility (m)"),
+    max_range: float = typer.Option(40_000.0, help="farthest feature counted from a viewpoint (m)"),
+    progress: bool = typer.Option(True, help="show a progress bar on stderr"),
+    json_out: bool = typer.Option(False, "--json", help="print the summary as one JSON object"),
+    crs: Optional[str] = CrsOpt,
+    cell_size: Optional[float] = CellOpt,
+    variant: Optional[str] = VariantOpt,
+):
+    """Build the model databases of a DEM (peaks, neighbour sets, co-visibility)."""
+    from .backend import mitsuba
+    from .dem import load_dem
+    from .model import CovisibilityParams, ModelParams, PeakParams, build_model, save_model
+
+    for name, value in (("--major-radius", major_radius), ("--minor-radius", minor_radius), ("--spacing", spacing),
+                        ("--max-range", max_range)):
+        if not value > 0:
+            raise InputError(f"{name} must be positive, got {value}")
+    if minor_radius > major_radius:
+        raise InputError("--minor-radius must not exceed --major-radius")
+    if camera_height < 0 or min_prominence < 0:
+        raise InputError("--camera-height and --min-prominence must be >= 0")
+    _check_model_dir(out)
+    mitsuba(variant)
+    t0 = time.perf_counter()
+    terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
+    params = ModelParams(PeakParams(major_radius, minor_radius, min_prominence), k,
+                         CovisibilityParams(spacing, camera_height, max_range))
+    built = build_model(terrain_dem, params, progress=progress and not json_out)
+    save_model(built, out)
+    seconds = time.perf_counter() - t0
+    rows, cols = terrain_dem.shape
+    if json_out:
+        emit_json({"model": str(out), "features": len(built.features), "major": int(built.features.major.sum()),
+                   "k": k, "viewpoints": built.covisibility.n_viewpoints, "rows": rows, "cols": cols,
+                   "cell_size": terrain_dem.cell_size[0], "crs": terrain_dem.crs, "seconds": seconds})
+    else:
+        typer.echo(built.summary())
+        typer.echo(f"wrote {out} in {seconds:.1f} s (DEM load included)")
+
+
+def _check_model_dir(path: Path) -> None:
+    """Create the model directory now, so a bad --out fails before minutes of work."""
+    if path.exists() and not path.is_dir():
+        raise InputError(f"--out {path} exists and is not a directory")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"--out: cannot create {path}: {exc.strerror or exc}") from None
+    if not os.access(path, os.W_OK):
+        raise InputError(f"--out: {path} is not writable")
+
+
 def _check_writable(path: Path, option: str) -> None:
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():

@@ -1,0 +1,40 @@
+"""Stage 1 — the model side (offline): peaks, neighbour sets, co-visibility.
+
+Entry point: :func:`build_model` (DEM -> :class:`Model`); :func:`save_model`
+and :func:`load_model` keep it in a versioned ``MODEL_DIR``.
+"""
+
+from __future__ import annotations
+
+import time
+
+from ..dem import DEM
+from ..errors import InputError
+from .covisibility import Covisibility, CovisibilityParams, learn_covisibility
+from .database import Model, ModelParams, load_model, save_model
+from .neighbours import k_nearest_features
+from .peaks import PeakParams, PeakTable, find_peaks
+
+__all__ = ["build_model", "Model", "ModelParams", "PeakParams", "CovisibilityParams", "load_model", "save_model",
+           "find_peaks", "k_nearest_features", "learn_covisibility", "PeakTable", "Covisibility"]
+
+
+def build_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None, progress: bool = False) -> Model:
+    """Build the model databases of a DEM: peaks -> k-nearest sets -> co-visibility.
+
+    ``terrain`` (a :class:`~skyrender.render.Terrain` of the same DEM) may be passed to
+    reuse its Mitsuba scene. InputError when the DEM has no peaks at all.
+    """
+    from ..render import Terrain
+
+    if params.k < 2:
+        raise InputError(f"k must be at least 2 (a pivot and two neighbours make a triple), got {params.k}")
+    t0 = time.perf_counter()
+    features = find_peaks(dem, params.peaks)
+    if len(features) == 0 or not features.major.any():
+        raise InputError(f"{dem.name}: no peaks found (a flat or featureless DEM, or radii larger than the DEM)")
+    pivots = features.subset(features.major)
+    neighbours = k_nearest_features(pivots.xyz[:, :2], features.xyz[:, :2], pivots.id, params.k)
+    terrain = terrain or Terrain(dem)
+    covis = learn_covisibility(terrain, features.xyz, pivots.id, params.covisibility, progress=progress)
+    return Model(dem, params, features, neighbours, covis, time.perf_counter() - t0)

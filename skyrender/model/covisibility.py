@@ -1,0 +1,121 @@
+"""Stage 1c — co-visibility learning (Naval 2000, section 2.4).
+
+Cameras are placed on a regular grid at camera height over the DEM. From each,
+a feature point is a *skyline feature* when it is visible (an unobstructed
+line of sight) and lies on the horizon at its azimuth: a ray a little above it
+(``horizon_tol_deg``) sees only sky. Counting over all viewpoints gives
+P(pivot) (how often a pivot is a skyline feature) and P(peak | pivot).
+Two batched Mitsuba ray tests per (viewpoint, feature) pair, no rendering.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..render import Terrain
+from ..render.visibility import line_of_sight
+
+
+@dataclass(frozen=True)
+class CovisibilityParams:
+    spacing: float = 1000.0  # metres between sampled viewpoints
+    height: float = 2.0  # camera height above ground (m)
+    max_range: float = 40_000.0  # features further away are not counted (m)
+    min_range: float = 200.0  # nor nearer ones: they tower over the camera (m)
+    horizon_tol_deg: float = 0.05  # how far above the feature the sky must begin
+
+
+@dataclass(frozen=True)
+class Covisibility:
+    """Counts and probabilities over the sampled viewpoints.
+
+    n_viewpoints : viewpoints sampled.
+    seen : (F,) int, viewpoints where each feature is a skyline feature.
+    together : (P, F) int, viewpoints where pivot p and feature f both are.
+    """
+
+    n_viewpoints: int
+    seen: np.ndarray
+    together: np.ndarray
+
+    def p_pivot(self, pivot_index: np.ndarray) -> np.ndarray:
+        """P(pivot): share of viewpoints where each pivot is a skyline feature."""
+        return self.seen[pivot_index] / max(self.n_viewpoints, 1)
+
+    def p_given_pivot(self, pivot_index: np.ndarray) -> np.ndarray:
+        """(P, F) P(feature | pivot); 0 where the pivot was never seen."""
+        denom = self.seen[pivot_index][:, None].astype(np.float64)
+        return np.divide(self.together, denom, out=np.zeros(self.together.shape), where=denom > 0)
+
+
+def viewpoint_grid(terrain: Terrain, spacing: float, height: float) -> np.ndarray:
+    """(V, 3) camera positions on a regular grid, ``height`` above the ground."""
+    xmin, xmax, ymin, ymax = terrain.dem.extent
+    xs = np.arange(xmin + spacing / 2, xmax, spacing)
+    ys = np.arange(ymin + spacing / 2, ymax, spacing)
+    xx, yy = np.meshgrid(xs, ys)
+    x, y = xx.ravel(), yy.ravel()
+    return np.column_stack([x, y, terrain.dem.ground(x, y) + height])
+
+
+def skyline_features(terrain: Terrain, cameras: np.ndarray, features: np.ndarray,
+                     params: CovisibilityParams) -> np.ndarray:
+    """(V, F) bool: is feature f a skyline feature seen from camera v?"""
+    V, F = len(cameras), len(features)
+    cam = np.repeat(cameras, F, axis=0)
+    feat = np.tile(features, (V, 1))
+    d = np.hypot(*(feat[:, :2] - cam[:, :2]).T)
+    out = np.zeros(V * F, dtype=bool)
+    cand = (d >= params.min_range) & (d <= params.max_range)
+    if not cand.any():
+        return out.reshape(V, F)
+    idx = np.flatnonzero(cand)
+    visible = line_of_sight(terrain, cam[idx], feat[idx], lift_m=0.0)
+    idx = idx[visible]
+    # the sky must begin just above the feature: lift its direction by the tolerance
+    seen = feat[idx].copy()
+    seen[:, 2] -= terrain.c * d[idx] ** 2  # as the camera sees it
+    direction = seen - cam[idx]
+    horiz = np.hypot(direction[:, 0], direction[:, 1])
+    elev = np.arctan2(direction[:, 2], horiz) + np.radians(params.horizon_tol_deg)
+    above = np.column_stack([direction[:, 0], direction[:, 1], horiz * np.tan(elev)])
+    out[idx] = ~terrain.ray_test(cam[idx], above)
+    return out.reshape(V, F)
+
+
+def learn_covisibility(terrain: Terrain, features: np.ndarray, pivot_index: np.ndarray,
+                       params: CovisibilityParams = CovisibilityParams(), progress: bool = False,
+                       max_pairs: int = 2_000_000) -> Covisibility:
+    """Accumulate skyline-feature statistics over a grid of viewpoints.
+
+    features : (F, 3) feature points (m); pivot_index : (P,) rows of the pivots.
+    Deterministic; chunks of viewpoints bound the memory.
+    """
+    cameras = viewpoint_grid(terrain, params.spacing, params.height)
+    cameras = cameras[np.isfinite(cameras[:, 2])]
+    F = len(features)
+    seen = np.zeros(F, dtype=np.int64)
+    together = np.zeros((len(pivot_index), F), dtype=np.int64)
+    chunk = max(1, max_pairs // max(F, 1))
+    starts = range(0, len(cameras), chunk)
+    bar = None
+    if progress:
+        from rich.progress import Progress
+
+        bar = Progress(transient=True)
+        bar.start()
+        task = bar.add_task("co-visibility", total=len(cameras))
+    try:
+        for s in starts:
+            sky = skyline_features(terrain, cameras[s : s + chunk], features, params)
+            seen += sky.sum(axis=0)
+            piv = sky[:, pivot_index].astype(np.int64)
+            together += piv.T @ sky.astype(np.int64)
+            if bar is not None:
+                bar.update(task, advance=len(sky))
+    finally:
+        if bar is not None:
+            bar.stop()
+    return Covisibility(len(cameras), seen, together)

@@ -1,0 +1,178 @@
+"""The model databases on disk: a versioned, self-contained ``MODEL_DIR``.
+
+``MODEL_DIR/model.json`` — format name and version, the DEM's fingerprint,
+grid, CRS and name, the build parameters, counts and build time.
+``MODEL_DIR/arrays.npz`` — the DEM elevations (so a model localizes on its
+own), the Model Feature Point Database (id, x, y, z, lon, lat, row, col,
+prominence, major), the pivots, their k nearest feature points, and the
+co-visibility counts.
+
+A model whose format version, DEM fingerprint or parameters do not match
+what the caller expects is refused with a message saying so.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from affine import Affine
+
+from ..dem import DEM
+from ..errors import InputError
+from .covisibility import Covisibility, CovisibilityParams
+from .peaks import PeakParams, PeakTable
+
+FORMAT = "skyrender-model"
+FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class ModelParams:
+    peaks: PeakParams = field(default_factory=PeakParams)
+    k: int = 15
+    covisibility: CovisibilityParams = field(default_factory=CovisibilityParams)
+
+    def to_dict(self) -> dict:
+        return {"peaks": asdict(self.peaks), "k": self.k, "covisibility": asdict(self.covisibility)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "ModelParams":
+        return cls(PeakParams(**d["peaks"]), int(d["k"]), CovisibilityParams(**d["covisibility"]))
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """Peak databases, neighbour sets and co-visibility statistics of one DEM."""
+
+    dem: DEM
+    params: ModelParams
+    features: PeakTable
+    neighbours: np.ndarray  # (P, k) feature rows, -1 = none
+    covisibility: Covisibility
+    build_seconds: float = 0.0
+
+    @property
+    def pivots(self) -> np.ndarray:
+        """Feature-table rows of the major peaks (pivots), in table order."""
+        return np.flatnonzero(self.features.major)
+
+    @property
+    def p_pivot(self) -> np.ndarray:
+        """(P,) P(pivot)."""
+        return self.covisibility.p_pivot(self.pivots)
+
+    @property
+    def p_neighbour(self) -> np.ndarray:
+        """(P, k) P(neighbour j | pivot i) for each pivot's k nearest; 0 for missing ones."""
+        cond = self.covisibility.p_given_pivot(self.pivots)
+        nb = self.neighbours
+        return np.where(nb >= 0, np.take_along_axis(cond, np.maximum(nb, 0), axis=1), 0.0)
+
+    def pivots_for_prior(self, ids=None, x: float | None = None, y: float | None = None,
+                         radius: float | None = None) -> np.ndarray:
+        """Pivot positions (indices into :attr:`pivots`) allowed by a prior
+        "mountain X is visible": given feature ids (a pivot, or a minor peak in a
+        pivot's neighbour set), or every pivot within ``radius`` metres of (x, y)."""
+        piv = self.pivots
+        allowed = np.zeros(len(piv), dtype=bool)
+        if ids is not None:
+            ids = np.asarray(list(ids), dtype=np.int64)
+            unknown = np.setdiff1d(ids, self.features.id)
+            if len(unknown):
+                raise InputError(f"unknown peak id(s) {', '.join(map(str, unknown[:5]))}")
+            allowed |= np.isin(self.features.id[piv], ids)
+            allowed |= np.isin(self.features.id[np.maximum(self.neighbours, 0)], ids).any(axis=1) & (
+                (self.neighbours >= 0).any(axis=1))
+        if x is not None:
+            if y is None or radius is None or radius <= 0:
+                raise InputError("a position prior needs x, y and a positive radius")
+            d = np.hypot(self.features.x[piv] - x, self.features.y[piv] - y)
+            allowed |= d <= radius
+        if ids is None and x is None:
+            allowed[:] = True
+        return np.flatnonzero(allowed)
+
+    def summary(self) -> str:
+        rows, cols = self.dem.shape
+        return (f"model of {self.dem.name}: {len(self.features)} feature points ({int(self.features.major.sum())} major), "
+                f"k = {self.params.k}, {self.covisibility.n_viewpoints} viewpoints; grid {cols} x {rows} cells of "
+                f"{self.dem.cell_size[0]:g} m ({self.dem.crs or 'local frame'}); built in {self.build_seconds:.1f} s")
+
+
+def save_model(model: Model, out_dir) -> None:
+    """Write ``model`` to ``out_dir`` (created if needed); InputError if it cannot be."""
+    out_dir = os.fspath(out_dir)
+    try:
+        os.makedirs(out_dir, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot create model directory {out_dir}: {exc.strerror or exc}") from None
+    if not os.access(out_dir, os.W_OK):
+        raise InputError(f"model directory {out_dir} is not writable")
+    f = model.features
+    lon = lat = np.full(len(f), np.nan)
+    if model.dem.crs is not None and len(f):
+        lon, lat = model.dem.to_lonlat(f.x, f.y)
+    meta = {
+        "format": FORMAT, "format_version": FORMAT_VERSION,
+        "dem": {"name": model.dem.name, "fingerprint": model.dem.fingerprint(), "crs": model.dem.crs,
+                "transform": list(tuple(model.dem.transform)[:6]), "shape": list(model.dem.shape),
+                "voids_filled": model.dem.repair.voids_filled, "spikes_repaired": model.dem.repair.spikes_repaired},
+        "params": model.params.to_dict(),
+        "counts": {"features": len(f), "major": int(f.major.sum()), "viewpoints": model.covisibility.n_viewpoints},
+        "build_seconds": model.build_seconds,
+    }
+    arrays = {
+        "elevation": model.dem.elevation, "id": f.id, "x": f.x, "y": f.y, "z": f.z, "lon": np.asarray(lon),
+        "lat": np.asarray(lat), "row": f.row, "col": f.col, "prominence": f.prominence, "major": f.major,
+        "neighbours": model.neighbours, "seen": model.covisibility.seen, "together": model.covisibility.together,
+    }
+    try:
+        tmp = os.path.join(out_dir, "arrays.tmp.npz")
+        np.savez(tmp, **arrays)
+        os.replace(tmp, os.path.join(out_dir, "arrays.npz"))
+        with open(os.path.join(out_dir, "model.json"), "w") as fh:
+            json.dump(meta, fh, indent=2)
+    except OSError as exc:
+        raise InputError(f"cannot write the model to {out_dir}: {exc.strerror or exc}") from None
+
+
+def load_model(model_dir, dem: DEM | None = None, params: ModelParams | None = None) -> Model:
+    """Read a model; refuse one of another format version, another DEM or other parameters."""
+    model_dir = os.fspath(model_dir)
+    meta_path = os.path.join(model_dir, "model.json")
+    try:
+        with open(meta_path) as fh:
+            meta = json.load(fh)
+    except FileNotFoundError:
+        raise InputError(f"{model_dir} is not a skyrender model (no model.json); build one with 'skyrender model'") from None
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot read model {meta_path}: {exc}") from None
+    if meta.get("format") != FORMAT:
+        raise InputError(f"{model_dir} is not a skyrender model")
+    if meta.get("format_version") != FORMAT_VERSION:
+        raise InputError(f"model {model_dir} has format version {meta.get('format_version')}, this skyrender reads "
+                         f"{FORMAT_VERSION}: rebuild it with 'skyrender model'")
+    stored = ModelParams.from_dict(meta["params"])
+    if params is not None and stored != params:
+        raise InputError(f"model {model_dir} was built with other parameters: rebuild it with 'skyrender model'")
+    if dem is not None and dem.fingerprint() != meta["dem"]["fingerprint"]:
+        raise InputError(f"model {model_dir} was built for DEM {meta['dem']['name']!r} "
+                         f"(fingerprint {meta['dem']['fingerprint']}), not for {dem.name!r} ({dem.fingerprint()}): "
+                         f"rebuild it with 'skyrender model'")
+    try:
+        a = np.load(os.path.join(model_dir, "arrays.npz"), allow_pickle=False)
+        arrays = {k: a[k] for k in a.files}
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot read model arrays in {model_dir}: {exc}") from None
+    if dem is None:
+        d = meta["dem"]
+        dem = DEM(arrays["elevation"], Affine(*d["transform"]), d["crs"], d["name"])
+        if dem.fingerprint() != d["fingerprint"]:
+            raise InputError(f"model {model_dir} is corrupt: its DEM does not match its fingerprint")
+    features = PeakTable(arrays["id"], arrays["x"], arrays["y"], arrays["z"], arrays["row"], arrays["col"],
+                         arrays["prominence"], arrays["major"].astype(bool))
+    covis = Covisibility(int(meta["counts"]["viewpoints"]), arrays["seen"], arrays["together"])
+    return Model(dem, stored, features, arrays["neighbours"], covis, float(meta.get("build_seconds", 0.0)))

@@ -1,0 +1,223 @@
+"""Model side: peaks, neighbour sets, co-visibility, the model directory."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from affine import Affine
+from scipy.optimize import minimize
+
+from skyrender.cli import main
+from skyrender.dem import DEM, fractal_terrain
+from skyrender.errors import InputError
+from skyrender.model import (CovisibilityParams, ModelParams, PeakParams, build_model, find_peaks,
+                             k_nearest_features, load_model, save_model)
+from skyrender.model.covisibility import skyline_features
+from skyrender.render import Terrain
+
+CELL = 50.0
+# (x, y, height, sigma): A and B share a massif 1.3 km apart; C stands alone 5 km away.
+BUMPS = [(3020.3, 6510.7, 1000.0, 350.0), (4310.6, 6480.2, 700.0, 300.0), (6980.9, 3040.4, 800.0, 400.0),
+         (7500.2, 7620.8, 400.0, 250.0)]
+
+
+def gaussians(x, y):
+    return 200.0 + sum(h * np.exp(-((x - bx) ** 2 + (y - by) ** 2) / (2 * s**2)) for bx, by, h, s in BUMPS)
+
+
+def analytic_dem() -> DEM:
+    y = 10_000 - (np.arange(200) + 0.5) * CELL
+    x = (np.arange(200) + 0.5) * CELL
+    return DEM(gaussians(x[None, :], y[:, None]), Affine(CELL, 0, 0, 0, -CELL, 10_000), None, "gaussians")
+
+
+def true_summits():
+    out = []
+    for bx, by, _, _ in BUMPS:
+        res = minimize(lambda p: -gaussians(p[0], p[1]), [bx, by], method="Nelder-Mead",
+                       options={"xatol": 1e-4, "fatol": 1e-8, "maxiter": 4000})
+        out.append(res.x)
+    return np.array(out)
+
+
+def test_peaks_of_an_analytic_terrain_lie_within_a_quarter_cell():
+    peaks = find_peaks(analytic_dem(), PeakParams(major_radius=1800, minor_radius=650))
+    truth = true_summits()
+    assert len(peaks) == 4
+    for tx, ty in truth:
+        d = np.hypot(peaks.x - tx, peaks.y - ty)
+        assert d.min() < CELL / 4
+    # summit heights from the quadratic fit are close to the analytic maxima
+    z_true = np.sort(gaussians(truth[:, 0], truth[:, 1]))[::-1]
+    np.testing.assert_allclose(peaks.z, z_true, atol=3.0)
+
+
+def test_major_and_minor_follow_the_radii():
+    truth = true_summits()
+    peaks = find_peaks(analytic_dem(), PeakParams(major_radius=1800, minor_radius=650))
+    major = {int(np.argmin(np.hypot(truth[:, 0] - x, truth[:, 1] - y))) for x, y in
+             zip(peaks.x[peaks.major], peaks.y[peaks.major])}
+    assert major == {0, 2, 3}  # B is 1.3 km from the higher A: minor only
+    wide = find_peaks(analytic_dem(), PeakParams(major_radius=5000, minor_radius=650))
+    assert int(wide.major.sum()) == 2  # within 5 km only A and C stay highest
+
+
+def test_radii_are_metres_not_cells():
+    coarse = analytic_dem()
+    fine_x = (np.arange(400) + 0.5) * 25.0
+    fine_y = 10_000 - (np.arange(400) + 0.5) * 25.0
+    fine = DEM(gaussians(fine_x[None, :], fine_y[:, None]), Affine(25, 0, 0, 0, -25, 10_000), None, "fine")
+    a, b = find_peaks(coarse), find_peaks(fine)
+    assert len(a) == len(b) and int(a.major.sum()) == int(b.major.sum())
+
+
+def test_paper_like_dem_gives_tens_of_major_and_hundreds_of_features():
+    peaks = find_peaks(fractal_terrain(seed=0))
+    assert 15 <= int(peaks.major.sum()) <= 60
+    assert 120 <= len(peaks) <= 320
+    assert (peaks.prominence >= 0).all() and (np.diff(peaks.z) <= 0).all()
+
+
+def test_neighbour_sets_match_brute_force():
+    peaks = find_peaks(fractal_terrain(seed=1))
+    piv = np.flatnonzero(peaks.major)
+    nb = k_nearest_features(peaks.xyz[piv, :2], peaks.xyz[:, :2], peaks.id[piv], k=15)
+    for i, p in enumerate(piv):
+        d = np.hypot(peaks.x - peaks.x[p], peaks.y - peaks.y[p])
+        d[p] = np.inf
+        brute = np.argsort(d, kind="stable")[:15]
+        np.testing.assert_allclose(np.sort(d[nb[i]]), np.sort(d[brute]))
+        assert p not in nb[i]
+
+
+def brute_skyline_feature(dem: DEM, cam, feat, tol_deg: float, min_range: float, max_range: float):
+    """Flat earth: visible by dense sampling of g along the segment, and no terrain
+    beyond it along the azimuth rising above the feature's elevation angle + tol."""
+    d = np.hypot(*(feat[:2] - cam[:2]))
+    if not (min_range <= d <= max_range):
+        return False, np.inf
+    s = np.linspace(0, 1, 3000)[:-1]
+    seg = cam[None, :] + s[:, None] * (feat - cam)[None, :]
+    sample_d = s * d
+    keep = sample_d < d - min(dem.cell_size)  # the last cell before the summit is not tested
+    gap = (seg[keep, 2] - dem.ground(seg[keep, 0], seg[keep, 1]))
+    visible = np.nanmin(gap) > 0
+    elev = np.arctan2(feat[2] - cam[2], d)
+    direction = (feat[:2] - cam[:2]) / d
+    far = np.linspace(1.0, 80_000.0, 20_000)
+    px, py = cam[0] + far * direction[0], cam[1] + far * direction[1]
+    g = dem.ground(px, py)
+    horizon = np.nanmax(np.arctan2(g - cam[2], far))
+    los_margin = abs(np.nanmin(gap)) / d  # angular clearance (or depth) of the segment
+    if not visible:
+        return False, los_margin
+    return bool(horizon <= elev + np.radians(tol_deg)), min(los_margin, abs(horizon - elev - np.radians(tol_deg)))
+
+
+def test_covisibility_agrees_with_brute_force_line_of_sight_and_horizon():
+    dem = fractal_terrain(200, 50.0, seed=2)
+    peaks = find_peaks(dem)
+    terrain = Terrain(dem, curvature=False)
+    params = CovisibilityParams(spacing=2000.0, height=2.0)
+    rng = np.random.default_rng(0)
+    xmin, xmax, ymin, ymax = dem.extent
+    cams_xy = rng.uniform([xmin + 500, ymin + 500], [xmax - 500, ymax - 500], (16, 2))
+    cams = np.column_stack([cams_xy, dem.ground(cams_xy[:, 0], cams_xy[:, 1]) + 2.0])
+    fast = skyline_features(terrain, cams, peaks.xyz, params)
+    checked = agree = 0
+    for v, cam in enumerate(cams):
+        for f, feat in enumerate(peaks.xyz):
+            truth, margin = brute_skyline_feature(dem, cam, feat, params.horizon_tol_deg, params.min_range,
+                                                  params.max_range)
+            if margin < 2e-4:  # grazing: sampling cannot decide
+                continue
+            checked += 1
+            agree += truth == fast[v, f]
+    assert checked > 300, checked
+    print(f"co-visibility: {agree}/{checked} decisions agree")
+    assert fast.any()
+    assert agree / checked >= 0.99
+
+
+def test_probabilities_lie_in_unit_interval_and_the_model_round_trips(tmp_path):
+    dem = fractal_terrain(300, 50.0, seed=5)
+    model = build_model(dem, ModelParams(covisibility=CovisibilityParams(spacing=1500.0)))
+    assert ((model.p_pivot >= 0) & (model.p_pivot <= 1)).all() and model.p_pivot.max() > 0
+    assert ((model.p_neighbour >= 0) & (model.p_neighbour <= 1)).all() and model.p_neighbour.max() > 0
+    save_model(model, tmp_path / "m")
+    again = load_model(tmp_path / "m", dem=dem)
+    np.testing.assert_array_equal(again.features.x, model.features.x)
+    np.testing.assert_array_equal(again.neighbours, model.neighbours)
+    np.testing.assert_array_equal(again.covisibility.together, model.covisibility.together)
+    alone = load_model(tmp_path / "m")  # self-contained: carries its DEM
+    assert alone.dem.fingerprint() == dem.fingerprint()
+
+
+def test_a_model_is_refused_for_another_dem_or_a_stale_format(tmp_path):
+    dem = fractal_terrain(200, 50.0, seed=6)
+    model = build_model(dem, ModelParams(covisibility=CovisibilityParams(spacing=2000.0)))
+    save_model(model, tmp_path / "m")
+    with pytest.raises(InputError, match="built for DEM"):
+        load_model(tmp_path / "m", dem=fractal_terrain(200, 50.0, seed=7))
+    with pytest.raises(InputError, match="other parameters"):
+        load_model(tmp_path / "m", params=ModelParams(k=10))
+    meta = json.loads((tmp_path / "m" / "model.json").read_text())
+    meta["format_version"] = 0
+    (tmp_path / "m" / "model.json").write_text(json.dumps(meta))
+    with pytest.raises(InputError, match="format version"):
+        load_model(tmp_path / "m")
+
+
+def test_prior_restricts_pivots():
+    dem = fractal_terrain(300, 50.0, seed=5)
+    model = build_model(dem, ModelParams(covisibility=CovisibilityParams(spacing=3000.0)))
+    piv = model.pivots
+    first = int(model.features.id[piv[0]])
+    assert 0 in model.pivots_for_prior(ids=[first])
+    x, y = model.features.x[piv[0]], model.features.y[piv[0]]
+    near = model.pivots_for_prior(x=x, y=y, radius=1.0)
+    np.testing.assert_array_equal(near, [0])
+    assert len(model.pivots_for_prior()) == len(piv)
+    with pytest.raises(InputError):
+        model.pivots_for_prior(ids=[99999])
+
+
+def _cli(capsys, args):
+    code = main(args)
+    err = capsys.readouterr().err.strip().splitlines()
+    return code, err
+
+
+def test_cli_model_builds_and_prints_a_summary(tmp_path, capsys):
+    dem_path = tmp_path / "dem.npz"
+    dem = fractal_terrain(200, 50.0, seed=8)
+    np.savez(dem_path, elevation=dem.elevation, cell_size=50.0, x_origin=dem.transform.c,
+             y_origin=dem.transform.f, crs=dem.crs)
+    code = main(["model", str(dem_path), "--out", str(tmp_path / "m"), "--json", "--spacing", "2000"])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["features"] > 0 and out["major"] > 0 and out["rows"] == 200
+    assert (tmp_path / "m" / "model.json").exists()
+
+
+@pytest.mark.parametrize("case", ["flat", "one_cell", "unwritable", "out_is_file"])
+def test_cli_model_bad_input_gives_one_line_and_exit_2(case, tmp_path, capsys):
+    dem_path = tmp_path / "dem.npy"
+    out = tmp_path / "m"
+    if case == "flat":
+        np.save(dem_path, np.full((100, 100), 500.0))
+    elif case == "one_cell":
+        np.save(dem_path, np.full((1, 1), 500.0))
+    else:
+        np.save(dem_path, fractal_terrain(100, 50.0, seed=1).elevation)
+        if case == "unwritable":
+            out = tmp_path / "ro" / "m"
+            (tmp_path / "ro").mkdir()
+            (tmp_path / "ro").chmod(0o500)
+            out = "/proc/skyrender-model" if __import__("os").geteuid() == 0 else out
+        else:
+            out.write_text("a file")
+    code, err = _cli(capsys, ["model", str(dem_path), "--cell-size", "50", "--out", str(out)])
+    assert code == 2
+    assert len(err) == 1 and err[0].startswith("skyrender: error:")
