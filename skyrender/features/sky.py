@@ -1,0 +1,72 @@
+"""Per-pixel sky probability for a photograph.
+
+Pixel features: CIE Lab colour, local texture (standard deviation of
+lightness in a 7 x 7 window, and gradient magnitude) and image row. The
+probability combines a prior on the row with colour-texture models learned
+*from the photo itself*: Gaussian mixtures (scikit-learn) fitted to pixels
+labelled sky and terrain by the previous boundary estimate (the first round
+seeds them from the top and bottom of the frame). Self-training adapts to
+what a fixed classifier cannot know: this photo's sky, haze and snow.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+FEATURE_NAMES = ("L", "a", "b", "texture", "gradient")
+
+
+def pixel_features(image: np.ndarray) -> np.ndarray:
+    """(H, W, 5) float32 features of an RGB uint8 image: L, a, b (CIE Lab, L in 0..100),
+    local lightness std (7 x 7) and Sobel gradient magnitude of lightness."""
+    import cv2
+
+    rgb = cv2.GaussianBlur(image, (3, 3), 0).astype(np.float32) / 255.0
+    lab = cv2.cvtColor(rgb, cv2.COLOR_RGB2Lab)
+    L = lab[..., 0]
+    mean = cv2.blur(L, (7, 7))
+    sq = cv2.blur(L * L, (7, 7))
+    texture = np.sqrt(np.maximum(sq - mean * mean, 0))
+    gx = cv2.Sobel(L, cv2.CV_32F, 1, 0, ksize=3)
+    gy = cv2.Sobel(L, cv2.CV_32F, 0, 1, ksize=3)
+    gradient = np.sqrt(gx * gx + gy * gy) / 8.0
+    return np.dstack([lab, texture, gradient]).astype(np.float32)
+
+
+def _fit_gmm(samples: np.ndarray, components: int, seed: int):
+    """Diagonal-covariance Gaussian mixture (scikit-learn), deterministic for a seed."""
+    from sklearn.mixture import GaussianMixture
+
+    n = int(min(components, max(1, len(samples) // 50)))
+    return GaussianMixture(n, covariance_type="full", reg_covar=0.5, max_iter=50,
+                           random_state=seed).fit(samples.astype(np.float64))
+
+
+def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np.ndarray,
+                    row_prior: np.ndarray, *, components: int = 3, max_samples: int = 20_000, row_weight: float = 40.0,
+                    seed: int = 0) -> np.ndarray:
+    """(H, W) P(sky) from colour-texture mixtures fitted to the given sky / terrain pixels.
+
+    ``row_prior`` (H,) is the prior P(sky) per row. Deterministic for a seed.
+    """
+    H, W, C = features.shape
+    rng = np.random.default_rng(seed)
+    x = features.reshape(-1, C).astype(np.float64)
+    if row_weight:  # sky colour changes with elevation angle: let the mixtures see the row
+        rows = np.repeat((np.arange(H) + 0.5) / H * row_weight, W)
+        x = np.column_stack([x, rows])
+
+    def pick(mask):
+        idx = np.flatnonzero(mask.ravel())
+        if len(idx) > max_samples:
+            idx = rng.choice(idx, max_samples, replace=False)
+        return x[idx]
+
+    s, t = pick(sky_mask), pick(terrain_mask)
+    if len(s) < 20 or len(t) < 20:  # one class absent: the prior alone decides
+        return np.broadcast_to(row_prior[:, None], (H, W)).astype(np.float32)
+    ll_sky = _fit_gmm(s, components, seed).score_samples(x)
+    ll_ter = _fit_gmm(t, components, seed + 1).score_samples(x)
+    prior = np.clip(np.repeat(row_prior, W), 1e-3, 1 - 1e-3)
+    logit = np.clip(ll_sky - ll_ter, -30, 30) + np.log(prior / (1 - prior))
+    return (1.0 / (1.0 + np.exp(-logit))).reshape(H, W).astype(np.float32)

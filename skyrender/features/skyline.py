@@ -1,0 +1,168 @@
+"""Stage 2a — skyline extraction from a photograph (``skyrender skyline``).
+
+1. Per-pixel sky probability (:mod:`.sky`): colour-texture models of this
+   photo's sky and terrain, re-fitted from each boundary estimate.
+2. A global optimum over columns (dynamic programming): one boundary row
+   per column minimising misclassified pixels, minus a bonus for a colour
+   edge at the boundary, plus a truncated-linear penalty on jumps between
+   neighbouring columns (poles and cliffs may jump, noise may not).
+3. Sub-pixel refinement from the colour profile across the boundary, and a
+   per-column confidence from its contrast and the probability margin.
+
+Output per CONTRACT.md: v per column (u = i + 0.5); NaN where a column sees
+only sky; 0 where terrain reaches the top edge.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .sky import pixel_features, sky_probability
+
+
+@dataclass(frozen=True)
+class SkylineParams:
+    jump_cost: float = 0.25  # per pixel of boundary jump between columns
+    jump_cap: float = 12.0  # no jump costs more than this (vertical edges)
+    edge_bonus: float = 6.0  # weight of the colour edge at the boundary
+    rounds: int = 3  # boundary estimate -> re-fit colour models -> boundary
+    band: int = 6  # pixels either side of the boundary left out of re-fitting
+    texture_weight: float = 0.3  # textured pixels are unlikely sky
+
+
+@dataclass(frozen=True)
+class ExtractedSkyline:
+    """skyline (W,) v per column; confidence (W,) in [0, 1]; sky_probability (H, W)."""
+
+    skyline: np.ndarray
+    confidence: np.ndarray
+    sky_probability: np.ndarray
+
+
+def boundary_dp(cost: np.ndarray, jump_cost: float, jump_cap: float) -> np.ndarray:
+    """Minimum-cost path through a (H+1, W) cost array, one row index per column.
+
+    Transition cost between columns: min(jump_cost * |b - b'|, jump_cap). The
+    min-convolution uses running minima, so each column costs O(H).
+    """
+    n, W = cost.shape
+    idx = np.arange(n)
+    back = np.zeros((n, W), dtype=np.int32)
+    d = cost[:, 0].astype(np.float64)
+    for j in range(1, W):
+        h = d - jump_cost * idx  # from above (b' <= b)
+        m1 = np.minimum.accumulate(h)
+        a1 = np.maximum.accumulate(np.where(h <= m1, idx, 0))
+        g1 = m1 + jump_cost * idx
+        h2 = (d + jump_cost * idx)[::-1]  # from below (b' >= b)
+        m2 = np.minimum.accumulate(h2)
+        a2 = np.maximum.accumulate(np.where(h2 <= m2, idx, 0))
+        g2 = (m2 - jump_cost * idx[::-1] * 0)[::-1] - jump_cost * idx
+        a2 = (n - 1 - a2)[::-1]
+        g = np.minimum(g1, g2)
+        arg = np.where(g1 <= g2, a1, a2)
+        best = int(np.argmin(d))
+        far = d[best] + jump_cap
+        arg = np.where(far < g, best, arg)
+        back[:, j] = arg
+        d = np.minimum(g, far) + cost[:, j]
+    path = np.empty(W, dtype=np.int64)
+    path[-1] = int(np.argmin(d))
+    for j in range(W - 1, 0, -1):
+        path[j - 1] = back[path[j], j]
+    return path
+
+
+def _edge_strength(features: np.ndarray) -> np.ndarray:
+    """(H+1, W) colour-edge strength between rows b-1 and b, in [0, 1]."""
+    lab = features[..., :3].astype(np.float64)
+    H = lab.shape[0]
+    pad = np.pad(lab, ((2, 2), (0, 0), (0, 0)), mode="edge")
+    above = 0.5 * (pad[0 : H + 1] + pad[1 : H + 2])  # rows b-2, b-1
+    below = 0.5 * (pad[2 : H + 3] + pad[3 : H + 4])  # rows b, b+1
+    e = np.linalg.norm(above - below, axis=2)
+    e[0] = e[-1] = 0.0
+    scale = max(np.percentile(e, 99.5), 1.0)
+    return np.clip(e / scale, 0, 1)
+
+
+def _row_prior(H: int) -> np.ndarray:
+    """P(sky) by row: likely at the top, unlikely at the bottom, neutral in between."""
+    v = (np.arange(H) + 0.5) / H
+    return 0.5 + 0.35 * np.tanh((0.5 - v) * 3.0)
+
+
+def _subpixel(features: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Refine integer boundaries: the sky coverage of the pixels around each boundary,
+    measured along the colour axis from terrain to sky, sums to the boundary offset."""
+    lab = features[..., :3].astype(np.float64)
+    H, W = lab.shape[:2]
+    cols = np.arange(W)
+    k = 2
+
+    def rows_mean(offsets):
+        r = np.clip(rows[None, :] + np.array(offsets)[:, None], 0, H - 1)
+        return lab[r, cols[None, :]].mean(axis=0)
+
+    sky = rows_mean([-5, -4, -3])
+    ter = rows_mean([2, 3, 4])
+    axis = sky - ter
+    norm2 = np.maximum(np.sum(axis**2, axis=1), 1e-9)
+    offsets = np.arange(-k, k)
+    r = np.clip(rows[None, :] + offsets[:, None], 0, H - 1)
+    s = np.sum((lab[r, cols[None, :]] - ter[None]) * axis[None], axis=2) / norm2[None]
+    coverage = np.clip(s, 0, 1).sum(axis=0)
+    refined = rows - k + coverage
+    contrast = np.sqrt(norm2)
+    ok = (rows > k) & (rows < H - k) & (contrast > 2.0)
+    return np.where(ok, np.clip(refined, rows - 1.0, rows + 1.0), rows.astype(np.float64)), contrast
+
+
+def initial_seeds(features: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """First-round training pixels: sky = the smooth region connected to the top edge
+    (sky is the smoothest thing that touches the top of a landscape photo); terrain =
+    the textured pixels and the bottom fifth of the frame, below every sky seed."""
+    from scipy import ndimage
+
+    H, W = features.shape[:2]
+    grad = ndimage.uniform_filter(features[..., 4], 5)
+    smooth = grad < max(0.6, float(np.percentile(grad, 35)))
+    labels, _ = ndimage.label(smooth)
+    top = np.unique(labels[0][labels[0] > 0])
+    sky = np.isin(labels, top) & smooth
+    sky = ndimage.binary_erosion(sky, iterations=3)
+    v = np.arange(H)[:, None]
+    lowest_sky = np.where(sky.any(axis=0), H - 1 - np.argmax(sky[::-1], axis=0), -1)
+    textured = grad > np.percentile(grad, 60)
+    terrain = ((v >= int(0.8 * H)) | textured) & (v > lowest_sky[None, :] + 3)
+    if sky.sum() < 0.01 * H * W:  # nothing smooth at the top: fall back to the top rows
+        sky = np.broadcast_to(v < max(2, int(0.1 * H)), (H, W)).copy()
+    return sky, terrain
+
+
+def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) -> ExtractedSkyline:
+    """The sky/terrain boundary of an RGB uint8 photo (see the module docstring)."""
+    H, W = image.shape[:2]
+    features = pixel_features(image)
+    prior = _row_prior(H)
+    edges = _edge_strength(features)
+    texture = np.clip(features[..., 4] / max(float(np.percentile(features[..., 4], 90)), 1e-3), 0, 1)
+    v = np.arange(H)[:, None]
+    sky_mask, terrain_mask = initial_seeds(features)
+    rows = None
+    for round_ in range(params.rounds):
+        p = sky_probability(features, sky_mask, terrain_mask, prior, seed=round_)
+        sky_cost = (1.0 - p) + params.texture_weight * texture  # what labelling a pixel sky costs
+        unary = np.vstack([np.zeros((1, W)), np.cumsum(sky_cost - p, axis=0)])
+        rows = boundary_dp(unary - params.edge_bonus * edges, params.jump_cost, params.jump_cap)
+        sky_mask = v < rows[None, :] - params.band
+        terrain_mask = v >= rows[None, :] + params.band
+    sub, contrast = _subpixel(features, rows)
+    skyline = np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub))
+    # confidence: probability margin either side of the boundary and colour contrast
+    above = np.array([p[max(0, r - 6) : max(0, r - 1), j].mean() if r > 1 else 1.0 for j, r in enumerate(rows)])
+    below = np.array([p[min(H, r + 1) : min(H, r + 6), j].mean() if r < H - 1 else 0.0 for j, r in enumerate(rows)])
+    confidence = np.clip(above - below, 0, 1) * np.clip(contrast / 15.0, 0, 1)
+    return ExtractedSkyline(skyline, confidence, p)
