@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: install demo test bench bench-render clean
+.PHONY: install demo test bench bench-render bench-skyline clean
 
 install: $(STAMP)
 
@@ -23,7 +23,10 @@ demo: install
 test: install
 	$(BIN)/python -m pytest -q
 
-bench: bench-render
+bench: bench-render bench-skyline
+
+bench-skyline: install
+	$(BIN)/python -m skyrender.benchmarks.skyline_photos
 
 bench-render: install
 	$(BIN)/python -m skyrender.benchmarks.renderer

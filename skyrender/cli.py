@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 from typing import Optional
 
+import numpy as np
 import typer
 
 from .errors import InputError
@@ -109,6 +110,44 @@ def render(
     else:
         typer.echo(f"rendered {out} ({width}x{height_px}) from x={pose.x:.1f} y={pose.y:.1f} z={pose.z:.1f} "
                    f"pan={pose.pan:.2f} tilt={pose.tilt:.2f} swing={pose.swing:.2f} fov={intrinsics.fov:.2f}")
+
+
+@app.command()
+def skyline(
+    image: Path = typer.Argument(..., help="photograph (PNG, JPEG, ...; gray, RGB, RGBA, 8/16-bit)"),
+    out: Optional[Path] = typer.Option(None, "--out", help="write the skyline (.npy or .json)"),
+    overlay: Optional[Path] = typer.Option(None, "--overlay", help="write the photo with the skyline drawn"),
+    peaks: int = typer.Option(6, "--peaks", help="skyline peaks to report (with --json)"),
+    json_out: bool = typer.Option(False, "--json", help="print {width, height, skyline} as one JSON object"),
+):
+    """Extract the skyline (sky/terrain boundary per column) from a photograph."""
+    from .features import extract_skyline, load_photo, skyline_peaks
+    from .io import save_skyline, skyline_to_list
+    from .viz import draw_skyline, write_image
+
+    if peaks < 0:
+        raise InputError(f"--peaks must be >= 0, got {peaks}")
+    for path, option in ((out, "--out"), (overlay, "--overlay")):
+        if path is not None:
+            _check_writable(path, option)
+    photo = load_photo(image)
+    result = extract_skyline(photo)
+    if out is not None:
+        save_skyline(out, result.skyline)
+    if overlay is not None:
+        write_image(overlay, draw_skyline(photo, result.skyline))
+    H, W = photo.shape[:2]
+    found = skyline_peaks(result.skyline, n=peaks)
+    if json_out:
+        emit_json({"width": W, "height": H, "skyline": skyline_to_list(result.skyline),
+                   "confidence": [round(float(c), 4) for c in result.confidence],
+                   "peaks": [{"u": p.u, "v": p.v, "size": p.size, "width": p.width} for p in found]})
+    else:
+        sky = result.skyline
+        typer.echo(f"{image}: {W} x {H}; skyline in {int(np.isfinite(sky).sum())} of {W} columns, "
+                   f"v {np.nanmin(sky) if np.isfinite(sky).any() else float('nan'):.1f} .. "
+                   f"{np.nanmax(sky) if np.isfinite(sky).any() else float('nan'):.1f}; {len(found)} peaks"
+                   + (f"; wrote {out}" if out else ""))
 
 
 @app.command()

@@ -37,13 +37,19 @@ def _fit_gmm(samples: np.ndarray, components: int, seed: int):
     """Diagonal-covariance Gaussian mixture (scikit-learn), deterministic for a seed."""
     from sklearn.mixture import GaussianMixture
 
+    import warnings
+
+    from sklearn.exceptions import ConvergenceWarning
+
     n = int(min(components, max(1, len(samples) // 50)))
-    return GaussianMixture(n, covariance_type="full", reg_covar=0.5, max_iter=50,
-                           random_state=seed).fit(samples.astype(np.float64))
+    with warnings.catch_warnings():  # 50 EM steps are plenty for a probability map
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        return GaussianMixture(n, covariance_type="full", reg_covar=0.5, max_iter=50,
+                               random_state=seed).fit(samples.astype(np.float64))
 
 
 def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np.ndarray,
-                    row_prior: np.ndarray, *, components: int = 3, max_samples: int = 20_000, row_weight: float = 40.0,
+                    row_prior: np.ndarray, *, components: int = 3, max_samples: int = 20_000, row_weight: float = 20.0,
                     seed: int = 0) -> np.ndarray:
     """(H, W) P(sky) from colour-texture mixtures fitted to the given sky / terrain pixels.
 

@@ -1,0 +1,117 @@
+"""Image side: skyline extraction and skyline peaks."""
+
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from skyrender.benchmarks.skyline_photos import column_errors, otsu_baseline, truth_from_red_line
+from skyrender.cli import main
+from skyrender.features import as_rgb8, extract_skyline, load_photo, skyline_peaks
+from skyrender.render.photo import Look, render_photo
+
+from .conftest import data_path
+
+
+@pytest.mark.parametrize("look", [Look(seed=1), Look(seed=2, noise=0.01, haze_distance=15_000.0, sun_elevation=12.0)])
+def test_skyline_of_a_rendered_photo_matches_its_truth(look, tujunga_terrain, tujunga_view):
+    pose, K = tujunga_view
+    photo = render_photo(tujunga_terrain, pose, K, look)
+    found = extract_skyline(photo.image)
+    e = column_errors(found.skyline, photo.sky_boundary)
+    assert np.median(e) < 1.0
+    assert np.mean(e <= 3) >= 0.95
+    assert found.confidence.shape == (K.width,) and ((found.confidence >= 0) & (found.confidence <= 1)).all()
+
+
+def test_foreground_occluders_are_part_of_the_extracted_skyline(tujunga_terrain, tujunga_view):
+    pose, K = tujunga_view
+    photo = render_photo(tujunga_terrain, pose, K, Look(seed=3, occluders=0.2))
+    found = extract_skyline(photo.image).skyline
+    tall = photo.sky_boundary < photo.skyline - 6  # trees/posts rising 6+ px above the terrain
+    assert tall.mean() > 0.1
+    assert np.mean(found[tall] < photo.skyline[tall] - 3) >= 0.9  # the extractor follows them
+    clear = ~(photo.sky_boundary < photo.skyline - 0.5)
+    assert np.median(np.abs(found[clear] - photo.skyline[clear])) < 1.0
+
+
+@pytest.mark.parametrize("name", ["web067", "web068", "web072"])
+def test_real_photo_skyline_meets_the_targets(name):
+    photo = load_photo(data_path("photos", "web", f"{name}.png"))
+    truth = truth_from_red_line(load_photo(data_path("photos", "web", f"{name}_gt.png")))
+    e = column_errors(extract_skyline(photo).skyline, truth)
+    assert np.median(e) <= 2.0
+    assert np.mean(e <= 5) >= 0.95
+
+
+def test_extractor_beats_the_otsu_baseline_on_a_hazy_photo():
+    photo = load_photo(data_path("photos", "web", "web067.png"))
+    truth = truth_from_red_line(load_photo(data_path("photos", "web", "web067_gt.png")))
+    ours = np.mean(column_errors(extract_skyline(photo).skyline, truth) <= 5)
+    base = np.mean(column_errors(otsu_baseline(photo), truth) <= 5)
+    assert ours > base + 0.5
+
+
+def test_peaks_of_gaussian_bumps_are_found_within_a_pixel():
+    u = np.arange(640) + 0.5
+    bumps = [(100.3, 40, 12), (250.7, 25, 10), (400.2, 60, 18), (530.9, 15, 8)]
+    sky = 300 - sum(a * np.exp(-((u - c) ** 2) / (2 * s**2)) for c, a, s in bumps)
+    peaks = skyline_peaks(sky, n=6)
+    assert [round(p.u) for p in peaks] == [400, 100, 251, 531]  # ordered by size (area)
+    for p in peaks:
+        c, a, _ = min(bumps, key=lambda b: abs(b[0] - p.u))
+        assert abs(p.u - c) < 1.0 and abs(p.v - (300 - a)) < 1.0
+
+
+def test_peaks_survive_noise_and_ignore_border_cutoffs():
+    rng = np.random.default_rng(0)
+    u = np.arange(640) + 0.5
+    sky = 300 - 50 * np.exp(-((u - 320.0) ** 2) / (2 * 20.0**2)) - 0.1 * u  # a bump on a slope (swing)
+    sky[:40] = 200 + 2 * u[:40]  # a ridge leaving through the left border
+    peaks = skyline_peaks(sky + rng.normal(0, 0.3, 640), n=3)
+    assert abs(peaks[0].u - 320) < 2.0
+    assert all(p.u > 40 for p in peaks)
+
+
+def test_photo_loading_normalises_formats(tmp_path):
+    rng = np.random.default_rng(1)
+    rgb = rng.integers(0, 255, (20, 30, 3), dtype=np.uint8)
+    cv2.imwrite(str(tmp_path / "c.png"), rgb[..., ::-1])
+    cv2.imwrite(str(tmp_path / "g.png"), rgb[..., 0])
+    cv2.imwrite(str(tmp_path / "d.png"), (rgb.astype(np.uint16) * 257)[..., ::-1])
+    rgba = np.dstack([rgb[..., ::-1], np.full((20, 30), 255, np.uint8)])
+    cv2.imwrite(str(tmp_path / "a.png"), rgba)
+    np.testing.assert_array_equal(load_photo(tmp_path / "c.png"), rgb)
+    np.testing.assert_array_equal(load_photo(tmp_path / "d.png"), rgb)
+    np.testing.assert_array_equal(load_photo(tmp_path / "a.png"), rgb)
+    gray = load_photo(tmp_path / "g.png")
+    assert gray.shape == (20, 30, 3) and (gray[..., 0] == rgb[..., 0]).all()
+    assert as_rgb8(rgb.astype(np.float32) / 255.0).dtype == np.uint8
+
+
+@pytest.mark.parametrize("case", ["text", "one_pixel", "missing"])
+def test_cli_skyline_bad_input_gives_one_line_and_exit_2(case, tmp_path, capsys):
+    path = tmp_path / "x.png"
+    if case == "text":
+        path.write_text("not an image")
+    elif case == "one_pixel":
+        cv2.imwrite(str(path), np.zeros((1, 1, 3), np.uint8))
+    code = main(["skyline", str(path)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and err[0].startswith("skyrender: error:")
+
+
+@pytest.mark.parametrize("fill", ["sky", "ground"])
+def test_cli_skyline_on_uniform_images_gives_a_defined_result(fill, tmp_path, capsys):
+    path = tmp_path / "u.png"
+    img = np.full((60, 80, 3), (120, 180, 230), np.uint8) if fill == "sky" else \
+        np.random.default_rng(0).integers(0, 120, (60, 80, 3)).astype(np.uint8)
+    cv2.imwrite(str(path), img[..., ::-1])
+    code = main(["skyline", str(path), "--json", "--out", str(tmp_path / "s.json")])
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["width"] == 80 and out["height"] == 60 and len(out["skyline"]) == 80
+    assert all(v is None or 0 <= v <= 60 for v in out["skyline"])
+    assert len(json.loads((tmp_path / "s.json").read_text())) == 80
