@@ -1,7 +1,8 @@
 """Per-pixel sky probability for a photograph.
 
 Pixel features: CIE Lab colour, local texture (standard deviation of
-lightness in a 7 x 7 window, and gradient magnitude) and image row. The
+lightness in a 7 x 7 window, and gradient magnitude) and image row (sky
+colour changes with elevation angle). The
 probability combines a prior on the row with colour-texture models learned
 *from the photo itself*: Gaussian mixtures (scikit-learn) fitted to pixels
 labelled sky and terrain by the previous boundary estimate (the first round
@@ -34,7 +35,7 @@ def pixel_features(image: np.ndarray) -> np.ndarray:
 
 
 def _fit_gmm(samples: np.ndarray, components: int, seed: int):
-    """Diagonal-covariance Gaussian mixture (scikit-learn), deterministic for a seed."""
+    """Full-covariance Gaussian mixture (scikit-learn), deterministic for a seed."""
     from sklearn.mixture import GaussianMixture
 
     import warnings
