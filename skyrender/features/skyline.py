@@ -59,7 +59,7 @@ def boundary_dp(cost: np.ndarray, jump_cost: float, jump_cap: float) -> np.ndarr
         h2 = (d + jump_cost * idx)[::-1]  # from below (b' >= b)
         m2 = np.minimum.accumulate(h2)
         a2 = np.maximum.accumulate(np.where(h2 <= m2, idx, 0))
-        g2 = (m2 - jump_cost * idx[::-1] * 0)[::-1] - jump_cost * idx
+        g2 = m2[::-1] - jump_cost * idx
         a2 = (n - 1 - a2)[::-1]
         g = np.minimum(g1, g2)
         arg = np.where(g1 <= g2, a1, a2)
