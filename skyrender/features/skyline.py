@@ -26,7 +26,7 @@ from .sky import pixel_features, sky_probability
 class SkylineParams:
     jump_cost: float = 0.25  # per pixel of boundary jump between columns
     jump_cap: float = 12.0  # no jump costs more than this (vertical edges)
-    edge_bonus: float = 6.0  # weight of the colour edge at the boundary
+    edge_bonus: float = 24.0  # weight of the colour edge at the boundary
     rounds: int = 3  # boundary estimate -> re-fit colour models -> boundary
     band: int = 6  # pixels either side of the boundary left out of re-fitting
     texture_weight: float = 0.3  # textured pixels are unlikely sky
