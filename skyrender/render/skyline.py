@@ -12,7 +12,8 @@ what a one-sample-per-pixel full render gives).
 
 Batched: one Dr.Jit kernel runs every column of every pose — thousands of
 poses per call. Pose values enter as array buffers, never literals, so a new
-pose does not recompile the kernel.
+pose does not recompile the kernel, and the kernel is frozen (``dr.freeze``)
+so its Python tracing is paid once.
 """
 
 from __future__ import annotations
@@ -71,13 +72,33 @@ def render_skylines(terrain: Terrain, poses, intrinsics: Intrinsics, *, subpixel
 
 
 def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixel: bool, n_iter: int):
-    """One Dr.Jit kernel: thread = (pose, column); a symbolic loop bisects v."""
+    """Run :func:`_bisect_columns` for every (pose, column) and return (P, W) float64."""
     import drjit as dr
 
     mi = terrain.mi
     P = len(basis)
-    buf = mi.Float(basis.astype(np.float32).ravel())
-    idx = dr.arange(mi.UInt32, P * W)
+    global _frozen_bisect
+    if _frozen_bisect is None:  # recorded once per (W, H, mode, iterations), then replayed
+        _frozen_bisect = dr.freeze(_bisect_columns)
+    result = _frozen_bisect(terrain.scene, mi.Float(basis.astype(np.float32).ravel()),
+                            dr.arange(mi.UInt32, P * W), mi.Float(terrain.max_distance), W, H, subpixel, n_iter)
+    return np.array(result, dtype=np.float64).reshape(P, W)
+
+
+_frozen_bisect = None
+
+
+def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_iter: int):
+    """One Dr.Jit kernel: thread = (pose, column); a symbolic loop bisects v.
+
+    ``buf`` holds 12 floats per pose (mesh-space origin and the ray basis d0, du, dv);
+    ``idx`` enumerates pose * W + column. Frozen by ``dr.freeze``: the Python tracing of
+    this function is paid once, later calls replay the recorded kernel.
+    """
+    import drjit as dr
+    import mitsuba as mi
+
+    n = dr.width(idx)
     pose = idx // W
     col = idx - pose * W
 
@@ -88,35 +109,30 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
     du = mi.Vector3f(g(6), g(7), g(8))
     dv = mi.Vector3f(g(9), g(10), g(11))
     a = mi.Vector3f(g(3), g(4), g(5)) + (mi.Float(col) + 0.5) * du
-    maxt = dr.opaque(mi.Float, terrain.max_distance)
 
     def hits(v):
-        return terrain.scene.ray_test(mi.Ray3f(o, dr.normalize(a + v * dv), maxt, 0.0, []))
+        return scene.ray_test(mi.Ray3f(o, dr.normalize(a + v * dv), maxt, 0.0, []))
 
-    n = dr.opaque(mi.UInt32, n_iter)
     if subpixel:
         top, bottom = hits(mi.Float(0.0)), hits(mi.Float(float(H)))
-        lo, hi = dr.zeros(mi.Float, P * W), dr.full(mi.Float, float(H), P * W)
+        lo, hi = dr.zeros(mi.Float, n), dr.full(mi.Float, float(H), n)
 
         def body(lo, hi, i):
             mid = 0.5 * (lo + hi)
             hit = hits(mid)
             return dr.select(hit, lo, mid), dr.select(hit, mid, hi), i + 1
 
-        lo, hi, _ = dr.while_loop((lo, hi, dr.zeros(mi.UInt32, P * W)), lambda lo, hi, i: i < n, body)
-        result = dr.select(top, 0.0, dr.select(bottom, 0.5 * (lo + hi), dr.nan))
-    else:
-        lo, hi = dr.full(mi.Float, -1.0, P * W), dr.full(mi.Float, float(H), P * W)
+        lo, hi, _ = dr.while_loop((lo, hi, dr.zeros(mi.UInt32, n)), lambda lo, hi, i: i < n_iter, body)
+        return dr.select(top, 0.0, dr.select(bottom, 0.5 * (lo + hi), dr.nan))
+    lo, hi = dr.full(mi.Float, -1.0, n), dr.full(mi.Float, float(H), n)
 
-        def body(lo, hi, i):
-            mid = dr.floor(0.5 * (lo + hi))
-            hit = hits(mid + 0.5)
-            return dr.select(hit, lo, mid), dr.select(hit, mid, hi), i + 1
+    def body(lo, hi, i):
+        mid = dr.floor(0.5 * (lo + hi))
+        hit = hits(mid + 0.5)
+        return dr.select(hit, lo, mid), dr.select(hit, mid, hi), i + 1
 
-        lo, hi, _ = dr.while_loop((lo, hi, dr.zeros(mi.UInt32, P * W)),
-                                  lambda lo, hi, i: (i < n) & (hi - lo > 1.0), body)
-        result = dr.select(hi >= float(H), dr.nan, hi)
-    return np.array(result, dtype=np.float64).reshape(P, W)
+    lo, hi, _ = dr.while_loop((lo, hi, dr.zeros(mi.UInt32, n)), lambda lo, hi, i: (i < n_iter) & (hi - lo > 1.0), body)
+    return dr.select(hi >= float(H), dr.nan, hi)
 
 
 def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixel: bool, n_iter: int):
