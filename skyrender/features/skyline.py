@@ -162,7 +162,15 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
     sub, contrast = _subpixel(features, rows)
     skyline = np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub))
     # confidence: probability margin either side of the boundary and colour contrast
-    above = np.array([p[max(0, r - 6) : max(0, r - 1), j].mean() if r > 1 else 1.0 for j, r in enumerate(rows)])
-    below = np.array([p[min(H, r + 1) : min(H, r + 6), j].mean() if r < H - 1 else 0.0 for j, r in enumerate(rows)])
+    csum = np.vstack([np.zeros((1, W)), np.cumsum(p, axis=0)])  # csum[k] = sum of p over rows < k
+
+    def band_mean(start, stop, default):
+        start, stop = np.clip(start, 0, H), np.clip(stop, 0, H)
+        cols = np.arange(W)
+        total = csum[stop, cols] - csum[start, cols]
+        return np.where(stop > start, total / np.maximum(stop - start, 1), default)
+
+    above = band_mean(rows - 6, rows - 1, 1.0)  # sky side of the boundary
+    below = band_mean(rows + 1, rows + 6, 0.0)  # terrain side
     confidence = np.clip(above - below, 0, 1) * np.clip(contrast / 15.0, 0, 1)
     return ExtractedSkyline(skyline, confidence, p)
