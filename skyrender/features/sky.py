@@ -49,6 +49,15 @@ def _fit_gmm(samples: np.ndarray, components: int, seed: int):
                                random_state=seed).fit(samples.astype(np.float64))
 
 
+def blue_sky_logit(features: np.ndarray, weight: float = 12.0) -> np.ndarray:
+    """(H, W) log-odds bonus for smooth blue pixels: clear sky is blue everywhere, so a
+    blue patch between clouds is sky even when this photo's sky model learned only clouds.
+    Blue (Lab b* below -8) must also be smooth (texture below 3): snow shadows are blue too."""
+    blue = np.clip((-features[..., 2] - 8.0) / 15.0, 0, 1)
+    smooth = np.clip(1.0 - features[..., 3] / 3.0, 0, 1)
+    return weight * blue * smooth
+
+
 def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np.ndarray,
                     row_prior: np.ndarray, *, components: int = 3, max_samples: int = 20_000, row_weight: float = 20.0,
                     seed: int = 0) -> np.ndarray:
@@ -75,5 +84,6 @@ def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np
     ll_sky = _fit_gmm(s, components, seed).score_samples(x)
     ll_ter = _fit_gmm(t, components, seed + 1).score_samples(x)
     prior = np.clip(np.repeat(row_prior, W), 1e-3, 1 - 1e-3)
-    logit = np.clip(ll_sky - ll_ter, -30, 30) + np.log(prior / (1 - prior))
+    # the mixtures' evidence saturates at +-10 so that the row and blue-sky priors still count
+    logit = np.clip(ll_sky - ll_ter, -10, 10) + np.log(prior / (1 - prior)) + blue_sky_logit(features).ravel()
     return (1.0 / (1.0 + np.exp(-logit))).reshape(H, W).astype(np.float32)
