@@ -14,9 +14,6 @@ from __future__ import annotations
 
 import numpy as np
 
-FEATURE_NAMES = ("L", "a", "b", "texture", "gradient")
-
-
 def pixel_features(image: np.ndarray) -> np.ndarray:
     """(H, W, 5) float32 features of an RGB uint8 image: L, a, b (CIE Lab, L in 0..100),
     local lightness std (7 x 7) and Sobel gradient magnitude of lightness."""

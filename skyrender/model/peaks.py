@@ -162,10 +162,11 @@ def find_peaks(dem: DEM, params: PeakParams = PeakParams()) -> PeakTable:
     z = dem.elevation
     minor_rc = local_maxima(z, params.minor_radius / cell)
     major_rc = local_maxima(z, params.major_radius / cell)
-    major_set = {tuple(p) for p in major_rc}
-    rc = np.concatenate([minor_rc, np.array([p for p in major_rc if tuple(p) not in {tuple(q) for q in minor_rc}],
-                                            dtype=np.int64).reshape(-1, 2)])
-    is_major = np.array([tuple(p) in major_set for p in rc], dtype=bool)
+    cols = z.shape[1]
+    minor_cells, major_cells = minor_rc[:, 0] * cols + minor_rc[:, 1], major_rc[:, 0] * cols + major_rc[:, 1]
+    cells = np.union1d(minor_cells, major_cells)  # a major peak is a minor one too
+    rc = np.column_stack([cells // cols, cells % cols])
+    is_major = np.isin(cells, major_cells)
     prominence = window_prominence(z, rc, params.major_radius / cell)
     keep = (prominence > 0) & (prominence >= params.min_prominence) & (~is_major | (prominence >= params.min_prominence_major))
     rc, is_major, prominence = rc[keep], is_major[keep], prominence[keep]
