@@ -126,6 +126,8 @@ class Terrain:
 
     def mesh_ray_test(self, o, d, maxt=None) -> np.ndarray:
         """:meth:`ray_test` for rays already in mesh space (see :meth:`to_mesh_space`)."""
+        if len(o) == 0:  # Dr.Jit aborts the process on empty rays
+            return np.zeros(0, dtype=bool)
         norm = np.linalg.norm(d, axis=-1)
         d = d / norm[:, None]
         if maxt is not None:
@@ -141,6 +143,8 @@ class Terrain:
         (inf where the ray misses); points (N, 3) the hit in world coordinates (as the
         terrain really is, not lowered); normals (N, 3) unit geometric normals (world).
         """
+        if len(origins) == 0:  # Dr.Jit aborts the process on empty rays
+            return np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3))
         o, (d,) = self.to_mesh_space(origins, (directions,), viewer_xy)
         norm = np.linalg.norm(d, axis=-1)
         d = d / norm[:, None]
