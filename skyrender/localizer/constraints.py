@@ -1,0 +1,98 @@
+"""Stage 3c — pruning constraints (Naval 2000, sections 2.5–2.6), batched.
+
+*Skyline is the limit*: no terrain point may appear above the photo's skyline,
+so a pose under which any model feature point projects above the skyline (by
+more than a tolerance) is wrong. Foreground occluders only raise the photo's
+skyline, so they never make this reject a right pose.
+
+*Visibility*: the three matched feature points are seen, so the camera has a
+clear line of sight to each; and two image peaks joined by a segment that runs
+through sky in the photo see each other, so the 3-D segment between their
+feature points must be unobstructed (inter-feature-point visibility).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..camera import Intrinsics, project
+from ..render import Terrain
+from ..render.visibility import line_of_sight
+
+#: Pose x point projections per chunk (bounds memory).
+CHUNK_PROJECTIONS = 4_000_000
+
+
+def skyline_limit(poses: np.ndarray, points: np.ndarray, skyline: np.ndarray, intrinsics: Intrinsics,
+                  tol_px: float = 3.0, curvature: bool = True) -> np.ndarray:
+    """(N,) bool: True where no point projects above the image skyline by more than ``tol_px``.
+
+    poses : (N, 6); points : (F, 3) world points (m); skyline : (W,) v per column
+    (NaN: the column sees only sky, so any terrain point in its visible part is a violation).
+    """
+    W, H = intrinsics.width, intrinsics.height
+    limit = np.where(np.isfinite(skyline), skyline - tol_px, H)  # v must not be smaller than this
+    ok = np.ones(len(poses), dtype=bool)
+    chunk = max(1, CHUNK_PROJECTIONS // max(len(points), 1))
+    for s in range(0, len(poses), chunk):
+        uv, front = project(points, poses[s : s + chunk], intrinsics, curvature)
+        u, v = uv[..., 0], uv[..., 1]
+        inside = front & (u >= 0) & (u < W)
+        col = np.clip(np.where(inside, u, 0), 0, W - 1).astype(np.int64)
+        above = inside & (v < limit[col])
+        ok[s : s + chunk] = ~above.any(axis=1)
+    return ok
+
+
+def features_visible(terrain: Terrain, poses: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(N,) bool: the camera of each pose (N, 6) has a clear line of sight to all its
+    matched points (N, 3, 3)."""
+    N = len(poses)
+    if N == 0:
+        return np.zeros(0, dtype=bool)
+    cams = np.repeat(poses[:, :3], 3, axis=0)
+    clear = line_of_sight(terrain, cams, points.reshape(-1, 3))
+    return clear.reshape(N, 3).all(axis=1)
+
+
+def segments_in_sky(peak_uv: np.ndarray, skyline: np.ndarray, tol_px: float = 1.0) -> np.ndarray:
+    """(n, n) bool: does the straight image segment between peaks i and j run through
+    sky (at or above the skyline, within ``tol_px``) in every column it crosses?"""
+    n = len(peak_uv)
+    out = np.zeros((n, n), dtype=bool)
+    sky = np.where(np.isfinite(skyline), skyline, np.inf)
+    for i in range(n):
+        for j in range(i + 1, n):
+            (u0, v0), (u1, v1) = sorted((tuple(peak_uv[i]), tuple(peak_uv[j])))
+            cols = np.arange(int(np.ceil(u0 - 0.5)), int(np.floor(u1 - 0.5)) + 1)
+            cols = cols[(cols >= 0) & (cols < len(sky))]
+            if len(cols) == 0:
+                continue
+            v = v0 + (v1 - v0) * (cols + 0.5 - u0) / max(u1 - u0, 1e-9)
+            out[i, j] = out[j, i] = bool(np.all(v <= sky[cols] + tol_px))
+    return out
+
+
+def interfeature_visibility(terrain: Terrain, image_triples: np.ndarray, feature_triples: np.ndarray,
+                            features_xyz: np.ndarray, in_sky: np.ndarray) -> np.ndarray:
+    """(N,) bool: for each hypothesis, every pair of its image peaks joined through sky
+    has an unobstructed 3-D segment between the matched feature points.
+
+    A segment's visibility does not depend on the pose, so each distinct feature
+    pair is tested once.
+    """
+    N = len(image_triples)
+    ok = np.ones(N, dtype=bool)
+    pairs = ((0, 1), (1, 2), (0, 2))
+    need = np.stack([in_sky[image_triples[:, a], image_triples[:, b]] for a, b in pairs], axis=1)  # (N, 3)
+    if not need.any():
+        return ok
+    fa = np.stack([feature_triples[:, a] for a, _ in pairs], axis=1)[need]
+    fb = np.stack([feature_triples[:, b] for _, b in pairs], axis=1)[need]
+    lo, hi = np.minimum(fa, fb), np.maximum(fa, fb)
+    F = len(features_xyz)
+    keys, inverse = np.unique(lo * F + hi, return_inverse=True)
+    clear = line_of_sight(terrain, features_xyz[keys // F], features_xyz[keys % F])
+    blocked = np.zeros(need.shape, dtype=bool)
+    blocked[need] = ~clear[inverse]
+    return ~blocked.any(axis=1)

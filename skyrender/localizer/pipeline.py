@@ -1,0 +1,314 @@
+"""Stages 3–4 put together: photo skyline -> hypotheses -> poses -> constraints ->
+verification -> refinement -> a pose with a confidence, or an abstention.
+
+Hypotheses are taken most probable first in chunks; after each chunk the best
+verified candidate is refined, and the search stops as soon as a refined pose
+agrees with the photo's skyline on ``accept_agreement`` of its columns.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..camera import Intrinsics
+from ..errors import InputError
+from ..features import ExtractedSkyline, extract_skyline, load_photo, skyline_peaks
+from ..model import Model
+from ..render import Terrain
+from .constraints import features_visible, interfeature_visibility, segments_in_sky, skyline_limit
+from .hypotheses import generate_hypotheses
+from .pose_solver import solve_poses
+from .refinement import Refined, refine_pose
+from .verification import ScoreParams, verify_poses
+
+#: Focal lengths tried when the field of view is unknown (horizontal fov, degrees).
+FOV_CANDIDATES = (30.0, 40.0, 50.0, 60.0, 70.0)
+
+
+@dataclass(frozen=True)
+class LocalizeParams:
+    n_peaks: int = 6  # image peaks taken (the paper's top N)
+    residual_px: float = 2.0  # reprojection cut-off of the three-point fit
+    limit_tol_px: float = 3.0  # "skyline is the limit" tolerance
+    chunk: int = 20_000  # hypotheses solved per batch
+    verify_stride: int = 4  # every n-th column in the verification renders
+    refine_per_chunk: int = 1  # best new candidates refined after each chunk
+    final_refinements: int = 3  # distinct candidates refined at the end
+    accept_agreement: float = 0.9  # stop early once a refined pose agrees this well
+    min_confidence: float = 0.5  # abstain below this
+    same_pose_m: float = 150.0  # candidates closer than this (and same heading) are one
+    ordered: bool = True  # probabilistic ordering (False: a seeded arbitrary order)
+    score: ScoreParams = field(default_factory=ScoreParams)
+
+
+@dataclass
+class LocalizeStats:
+    generated: int = 0
+    evaluated: int = 0
+    rejected: dict = field(default_factory=lambda: {"residual": 0, "geometry": 0, "skyline_limit": 0,
+                                                    "camera_visibility": 0, "interfeature_visibility": 0})
+    verified: int = 0
+    refined: int = 0
+    seconds: dict = field(default_factory=dict)
+
+    def add_time(self, stage: str, seconds: float) -> None:
+        self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
+
+    def to_dict(self) -> dict:
+        solve = self.seconds.get("pose_solver", 0.0)
+        return {"generated": self.generated, "evaluated": self.evaluated, "rejected": dict(self.rejected),
+                "rejected_share": {k: (v / self.evaluated if self.evaluated else 0.0) for k, v in self.rejected.items()},
+                "verified": self.verified, "refined": self.refined,
+                "seconds": {k: round(v, 4) for k, v in self.seconds.items()},
+                "hypotheses_per_second": self.evaluated / solve if solve > 0 else 0.0}
+
+
+@dataclass
+class LocalizationResult:
+    """Outcome of :func:`localize`. ``pose`` is (x, y, z, pan, tilt, swing) or None when abstained."""
+
+    status: str
+    pose: np.ndarray | None
+    fov: float | None
+    confidence: float
+    seconds: float
+    hypotheses: int
+    stats: LocalizeStats
+    intrinsics: Intrinsics | None = None
+    image_skyline: np.ndarray | None = None
+    rendered_skyline: np.ndarray | None = None
+    crs: str | None = None
+    lonlat: tuple[float, float] | None = None
+
+    @property
+    def localized(self) -> bool:
+        return self.status == "localized"
+
+    def to_json(self) -> dict:
+        if not self.localized:
+            return {"status": "abstained", "seconds": round(self.seconds, 3), "hypotheses": self.hypotheses}
+        x, y, z, pan, tilt, swing = (float(v) for v in self.pose)
+        lon, lat = self.lonlat if self.lonlat is not None else (None, None)
+        return {"status": "localized", "x": x, "y": y, "z": z, "pan": pan, "tilt": tilt, "swing": swing,
+                "fov": self.fov, "lat": lat, "lon": lon, "crs": self.crs, "confidence": round(self.confidence, 4),
+                "seconds": round(self.seconds, 3), "hypotheses": self.hypotheses}
+
+
+@dataclass
+class _Candidate:
+    pose: np.ndarray
+    f_px: float
+    score: float
+    agreement: float
+    refined: Refined | None = None
+
+
+def _image_skyline(image, skyline) -> tuple[np.ndarray, np.ndarray, int, int]:
+    """(skyline, weights, W, H) from a photo (path or array) or a given skyline."""
+    if isinstance(image, (str, bytes)) or hasattr(image, "__fspath__"):
+        image = load_photo(image)
+    image = np.asarray(image)
+    if image.ndim < 2:
+        raise InputError(f"an image must be 2-D (H x W) or H x W x channels, got shape {image.shape}")
+    H, W = image.shape[:2]
+    if skyline is None:
+        skyline = extract_skyline(image)
+    if isinstance(skyline, ExtractedSkyline):
+        return skyline.skyline.astype(np.float64), np.clip(skyline.confidence, 0.05, 1.0), W, H
+    sky = np.asarray(skyline, np.float64)
+    if sky.shape != (W,):
+        raise InputError(f"the skyline has {sky.size} values but the image is {W} columns wide")
+    return sky, np.ones(W), W, H
+
+
+def _distinct(cands: list[_Candidate], pose: np.ndarray, same_m: float) -> bool:
+    for c in cands:
+        if math.hypot(c.pose[0] - pose[0], c.pose[1] - pose[1]) < same_m and abs(
+                (c.pose[3] - pose[3] + 180.0) % 360.0 - 180.0) < 3.0:
+            return False
+    return True
+
+
+def confidence_of(best: Refined, runner_up: Refined | None) -> float:
+    """Agreement of the best refined pose, discounted when a distinct pose fits almost as well."""
+    if runner_up is None:
+        return best.agreement
+    margin = best.agreement - runner_up.agreement
+    return float(best.agreement * min(1.0, 0.5 + 5.0 * max(margin, 0.0)))
+
+
+def localize(image, model: Model, height: float, fov: float | None = None, prior=None, *,
+             terrain: Terrain | None = None, skyline=None, params: LocalizeParams = LocalizeParams(),
+             curvature: bool = True) -> LocalizationResult:
+    """Camera pose from one photograph and a model.
+
+    Parameters
+    ----------
+    image : photo path or array (H x W [x C]).
+    model : the model databases of the DEM (:func:`skyrender.model.build_model`).
+    height : camera height above ground (m).
+    fov : horizontal field of view (degrees); None = unknown, estimated.
+    prior : None, or a dict for :meth:`Model.pivots_for_prior` ("mountain X visible":
+        ``{"ids": [...]}`` or ``{"x": .., "y": .., "radius": ..}``).
+    terrain : a Terrain of ``model.dem`` to reuse; skyline : the photo's skyline
+        (an ExtractedSkyline or a (W,) array) when already extracted.
+
+    Returns a :class:`LocalizationResult` (``status`` "localized" or "abstained").
+    """
+    if not (math.isfinite(height) and height >= 0):
+        raise InputError(f"camera height above ground must be >= 0 m, got {height}")
+    t_start = time.perf_counter()
+    stats = LocalizeStats()
+    tick = time.perf_counter()
+    sky, weights, W, H = _image_skyline(image, skyline)
+    fovs = (float(fov),) if fov is not None else FOV_CANDIDATES
+    intrinsics = Intrinsics.from_fov(fovs[0], W, H)
+    peaks = skyline_peaks(sky, n=params.n_peaks)
+    stats.add_time("image_features", time.perf_counter() - tick)
+    tick = time.perf_counter()
+    terrain = terrain if terrain is not None else Terrain(model.dem, curvature=curvature)
+    stats.add_time("terrain", time.perf_counter() - tick)
+
+    def abstain() -> LocalizationResult:
+        return LocalizationResult("abstained", None, None, 0.0, time.perf_counter() - t_start, stats.evaluated, stats,
+                                  intrinsics, sky)
+
+    if len(peaks) < 3:
+        return abstain()
+    tick = time.perf_counter()
+    peak_uv = np.array([[p.u, p.v] for p in peaks])
+    pivots = model.pivots_for_prior(**prior) if prior else None
+    hyps = generate_hypotheses(peak_uv[:, 0], np.array([p.size for p in peaks]), model, pivots, params.ordered)
+    in_sky = segments_in_sky(peak_uv, sky)
+    stats.generated = len(hyps) * len(fovs)
+    features = model.features.xyz
+    stats.add_time("hypotheses", time.perf_counter() - tick)
+
+    candidates: list[_Candidate] = []
+    accepted = None
+    for start in range(0, len(hyps), params.chunk):
+        chunk = hyps.take(slice(start, start + params.chunk))
+        for fov_i in fovs:
+            f_px = Intrinsics.from_fov(fov_i, W, H).f_px
+            tick = time.perf_counter()
+            poses, residual = solve_poses(model.dem, peak_uv[chunk.image], features[chunk.features], height, f_px,
+                                          W / 2.0, H / 2.0, curvature)
+            stats.evaluated += len(chunk)
+            stats.add_time("pose_solver", time.perf_counter() - tick)
+            tick = time.perf_counter()
+            keep = residual <= params.residual_px
+            stats.rejected["residual"] += int((~keep).sum())
+            idx = np.flatnonzero(keep)
+            k_i = Intrinsics(W, H, f_px, W / 2.0, H / 2.0)
+            idx = _apply(idx, _geometry_ok(poses[idx], features[chunk.features[idx]], k_i, curvature), stats,
+                         "geometry")
+            idx = _apply(idx, skyline_limit(poses[idx], features, sky, k_i, params.limit_tol_px, curvature), stats,
+                         "skyline_limit")
+            stats.add_time("constraints", time.perf_counter() - tick)
+            tick = time.perf_counter()
+            idx = _apply(idx, features_visible(terrain, poses[idx], features[chunk.features[idx]]), stats,
+                         "camera_visibility")
+            idx = _apply(idx, interfeature_visibility(terrain, chunk.image[idx], chunk.features[idx], features,
+                                                      in_sky), stats, "interfeature_visibility")
+            stats.add_time("visibility", time.perf_counter() - tick)
+            if len(idx) == 0:
+                continue
+            tick = time.perf_counter()
+            unique = _dedupe(poses[idx])
+            score, agreement = verify_poses(terrain, poses[idx[unique]], k_i, sky, weights, params.verify_stride,
+                                            params=params.score)
+            stats.verified += len(unique)
+            stats.add_time("verification", time.perf_counter() - tick)
+            for j in np.argsort(score)[: 4 * params.final_refinements]:
+                pose = poses[idx[unique[j]]]
+                if _distinct(candidates, pose, params.same_pose_m):
+                    candidates.append(_Candidate(pose, f_px, float(score[j]), float(agreement[j])))
+        candidates.sort(key=lambda c: c.score)
+        del candidates[8 * params.final_refinements:]
+        tick = time.perf_counter()
+        for cand in [c for c in candidates if c.refined is None][: params.refine_per_chunk]:
+            _refine(cand, terrain, intrinsics, height, sky, weights, fov is None, params, stats)
+        stats.add_time("refinement", time.perf_counter() - tick)
+        done = [c for c in candidates if c.refined is not None]
+        if done and max(c.refined.agreement for c in done) >= params.accept_agreement:
+            accepted = max(done, key=lambda c: c.refined.agreement)
+            break
+
+    tick = time.perf_counter()
+    for cand in [c for c in candidates if c.refined is None][: max(0, params.final_refinements - stats.refined)]:
+        _refine(cand, terrain, intrinsics, height, sky, weights, fov is None, params, stats)
+    stats.add_time("refinement", time.perf_counter() - tick)
+    done = sorted([c for c in candidates if c.refined is not None], key=lambda c: -c.refined.agreement)
+    if not done:
+        return abstain()
+    best = accepted or done[0]
+    others = [c for c in done if c is not best and _distinct([best], c.refined.pose, params.same_pose_m)
+              and _distinct([best], c.pose, params.same_pose_m)]
+    confidence = confidence_of(best.refined, others[0].refined if others else None)
+    if confidence < params.min_confidence:
+        return abstain()
+    r = best.refined
+    k_best = Intrinsics(W, H, r.f_px, W / 2.0, H / 2.0)
+    from ..render import render_skylines
+
+    rendered = render_skylines(terrain, r.pose, k_best)
+    lonlat = None
+    if model.dem.crs is not None:
+        lon, lat = model.dem.to_lonlat(r.pose[0], r.pose[1])
+        lonlat = (float(lon), float(lat))
+    return LocalizationResult("localized", r.pose, k_best.fov, confidence, time.perf_counter() - t_start,
+                              stats.evaluated, stats, k_best, sky, rendered, model.dem.crs, lonlat)
+
+
+def _apply(idx: np.ndarray, ok: np.ndarray, stats: LocalizeStats, name: str) -> np.ndarray:
+    stats.rejected[name] += int((~ok).sum())
+    return idx[ok]
+
+
+def _geometry_ok(poses: np.ndarray, points: np.ndarray, intrinsics: Intrinsics, curvature: bool,
+                 margin_px: float = 5.0) -> np.ndarray:
+    """Inside the DEM, and the three matched points in front and within the image."""
+    ok = np.isfinite(poses).all(axis=1)
+    if not ok.any():
+        return ok
+    out = np.zeros(len(poses), dtype=bool)
+    sub = np.flatnonzero(ok)
+    uv = _own_projection(points[sub], poses[sub], intrinsics, curvature)
+    u, v = uv[..., 0], uv[..., 1]
+    inside = (u > -margin_px) & (u < intrinsics.width + margin_px) & (v > -margin_px) & (v < intrinsics.height + margin_px)
+    out[sub] = np.all(inside & np.isfinite(u), axis=1)
+    return out
+
+
+def _own_projection(points: np.ndarray, poses: np.ndarray, intrinsics: Intrinsics, curvature: bool) -> np.ndarray:
+    """(N, 3, 2) projections of each pose's own three points (N, 3, 3)."""
+    from ..camera import camera_axes, lower_points
+
+    right, up, fwd = camera_axes(poses[:, 3], poses[:, 4], poses[:, 5])
+    seen = lower_points(points, poses[:, None, :2], curvature)
+    c = seen - poses[:, None, :3]
+    zc = (c * fwd[:, None]).sum(-1)
+    xc = (c * right[:, None]).sum(-1)
+    yc = (c * up[:, None]).sum(-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = np.where(zc > 0, intrinsics.cx + intrinsics.f_px * xc / zc, np.nan)
+        v = np.where(zc > 0, intrinsics.cy - intrinsics.f_px * yc / zc, np.nan)
+    return np.stack([u, v], axis=-1)
+
+
+def _dedupe(poses: np.ndarray, cell_m: float = 50.0, cell_deg: float = 1.0) -> np.ndarray:
+    """Indices of one pose per (x, y, pan) bin: many hypotheses give the same pose."""
+    key = np.column_stack([np.floor(poses[:, 0] / cell_m), np.floor(poses[:, 1] / cell_m),
+                           np.floor(poses[:, 3] / cell_deg)])
+    _, first = np.unique(key, axis=0, return_index=True)
+    return np.sort(first)
+
+
+def _refine(cand: _Candidate, terrain, intrinsics, height, sky, weights, fit_focal, params, stats) -> None:
+    cand.refined = refine_pose(terrain, cand.pose, intrinsics, height, sky, weights, fit_focal=fit_focal,
+                               f_px=cand.f_px, params=params.score)
+    stats.refined += 1

@@ -1,0 +1,77 @@
+"""Stage 4a — verification: render each surviving pose's skyline and score it
+against the photo's skyline (Naval 2000, section 2.6, with a robust score).
+
+Per column, e = rendered v - photo v (px). Terrain where the photo shows sky
+(e < 0) is a plain error. Photo skyline above the terrain (e > 0) may be a
+foreground occluder (a tree, a post), so it costs only ``occluder_weight`` of
+that. Errors are capped (one bad column cannot dominate) and weighted by the
+photo's per-column confidence. The score is the weighted mean cost (px); the
+agreement is the weighted share of columns within ``agree_px``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..camera import Intrinsics
+from ..render import Terrain, render_skylines
+
+
+@dataclass(frozen=True)
+class ScoreParams:
+    cap_px: float = 20.0
+    occluder_weight: float = 0.25
+    agree_px: float = 2.0
+
+
+def column_errors(rendered: np.ndarray, image: np.ndarray, cap_px: float) -> np.ndarray:
+    """(..., W) rendered - image (px); a column where exactly one of them is NaN
+    (sky only) counts as -cap (terrain missing or extra is never an occluder), both NaN as 0."""
+    e = rendered - image
+    one_nan = np.isnan(rendered) ^ np.isnan(image)
+    e = np.where(one_nan, -cap_px, e)
+    return np.where(np.isnan(e), 0.0, e)
+
+
+def score_skylines(rendered: np.ndarray, image: np.ndarray, weights: np.ndarray,
+                   params: ScoreParams = ScoreParams()) -> tuple[np.ndarray, np.ndarray]:
+    """Robust score (px, lower is better) and agreement share of rendered skylines
+    (P, W) against the photo's (W,), with per-column weights (W,) in [0, 1]."""
+    e = column_errors(rendered, image, params.cap_px)
+    cost = np.where(e < 0, np.minimum(-e, params.cap_px), params.occluder_weight * np.minimum(e, params.cap_px))
+    total = max(float(np.sum(weights)), 1e-9)
+    score = (cost * weights).sum(axis=-1) / total
+    agreement = ((np.abs(e) <= params.agree_px) * weights).sum(axis=-1) / total
+    return score, agreement
+
+
+def strided_intrinsics(intrinsics: Intrinsics, stride: int) -> tuple[Intrinsics, np.ndarray]:
+    """Intrinsics of a ``stride`` times smaller image whose column k samples the full
+    image's column ``stride*k + stride//2`` exactly; returns them and those columns.
+    Its v coordinates scale back by ``v_full = cy + stride * (v - cy_small)``."""
+    W, H = intrinsics.width, intrinsics.height
+    cols = np.arange(stride // 2, W, stride)
+    f = intrinsics.f_px / stride
+    # column k's centre k + 0.5 must look along full column centre cols[0] + 0.5 + stride * k
+    cx = 0.5 - (cols[0] + 0.5 - intrinsics.cx) / stride
+    small = Intrinsics(len(cols), max(2, int(np.ceil(H / stride))), f, cx, intrinsics.cy / stride)
+    return small, cols
+
+
+def verify_poses(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, image_skyline: np.ndarray,
+                 weights: np.ndarray, stride: int = 4, per_pose_f=None,
+                 params: ScoreParams = ScoreParams()) -> tuple[np.ndarray, np.ndarray]:
+    """Score many poses (P, 6) on every ``stride``-th column; returns (score, agreement), each (P,)."""
+    if len(poses) == 0:
+        return np.zeros(0), np.zeros(0)
+    small, cols = strided_intrinsics(intrinsics, stride)
+    per_pose = None
+    if per_pose_f is not None:
+        f = np.asarray(per_pose_f, np.float64) / stride
+        per_pose = np.column_stack([f, np.full(len(f), small.cx), np.full(len(f), small.cy)])
+    # bisect to half a full-size pixel
+    rendered = render_skylines(terrain, poses, small, subpixel=True, tol=0.5 / stride, per_pose_intrinsics=per_pose)
+    rendered = intrinsics.cy + stride * (rendered - small.cy)
+    return score_skylines(rendered, image_skyline[cols], weights[cols], params)
