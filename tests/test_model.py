@@ -170,18 +170,19 @@ def test_a_model_is_refused_for_another_dem_or_a_stale_format(tmp_path):
         load_model(tmp_path / "m")
 
 
-def test_prior_restricts_pivots():
+def test_prior_selects_features():
     dem = fractal_terrain(300, 50.0, seed=5)
     model = build_model(dem, ModelParams(covisibility=CovisibilityParams(spacing=3000.0)))
     piv = model.pivots
     first = int(model.features.id[piv[0]])
-    assert 0 in model.pivots_for_prior(ids=[first])
+    np.testing.assert_array_equal(np.flatnonzero(model.features_for_prior(ids=[first])), [piv[0]])
     x, y = model.features.x[piv[0]], model.features.y[piv[0]]
-    near = model.pivots_for_prior(x=x, y=y, radius=1.0)
-    np.testing.assert_array_equal(near, [0])
-    assert len(model.pivots_for_prior()) == len(piv)
+    np.testing.assert_array_equal(np.flatnonzero(model.features_for_prior(x=x, y=y, radius=1.0)), [piv[0]])
+    assert model.features_for_prior().all()
     with pytest.raises(InputError):
-        model.pivots_for_prior(ids=[99999])
+        model.features_for_prior(ids=[99999])
+    with pytest.raises(InputError):
+        model.features_for_prior(x=x, y=y, radius=-1.0)
 
 
 def _cli(capsys, args):

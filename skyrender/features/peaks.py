@@ -2,8 +2,9 @@
 
 The skyline is smoothed, split into intervals where its second derivative
 (of height, i.e. -v) is negative, and each interval is taken as one
-Gaussian-shaped bump: its apex is the highest point (refined by a parabola
-through the three samples around it), its size the area between the curve and
+Gaussian-shaped bump: its apex is the highest point (u refined by a parabola
+through the three smoothed samples around it, v the highest raw sample within
+two columns, since smoothing flattens a sharp summit), its size the area between the curve and
 the chord joining the interval's ends. Intervals that touch the image border
 or a gap (NaN) are cut-offs, not peaks, and are dropped.
 """
@@ -52,7 +53,9 @@ def skyline_peaks(skyline: np.ndarray, n: int = 6, smooth_px: float = 2.0, min_s
             denom = y0 - 2 * y1 + y2
             offset = 0.5 * (y0 - y2) / denom if denom < 0 else 0.0
             offset = float(np.clip(offset, -0.5, 0.5))
-            apex_h = y1 - 0.25 * (y0 - y2) * offset
+            # the apex height from the unsmoothed skyline: smoothing flattens sharp summits
+            raw = sky[start + max(k - 2, 0) : start + min(k + 3, len(h))]
+            apex_h = float(-np.nanmin(raw))
             x = np.arange(a, b)
             chord = h[a] + (h[b - 1] - h[a]) * (x - a) / max(b - 1 - a, 1)
             size = float(np.sum(np.clip(seg - chord, 0, None)))

@@ -5,10 +5,9 @@ so a pose under which any model feature point projects above the skyline (by
 more than a tolerance) is wrong. Foreground occluders only raise the photo's
 skyline, so they never make this reject a right pose.
 
-*Visibility*: the three matched feature points are seen, so the camera has a
-clear line of sight to each; and two image peaks joined by a segment that runs
+*Inter-feature-point visibility*: two image peaks joined by a segment that runs
 through sky in the photo see each other, so the 3-D segment between their
-feature points must be unobstructed (inter-feature-point visibility).
+feature points must be unobstructed.
 """
 
 from __future__ import annotations
@@ -24,35 +23,30 @@ CHUNK_PROJECTIONS = 4_000_000
 
 
 def skyline_limit(poses: np.ndarray, points: np.ndarray, skyline: np.ndarray, intrinsics: Intrinsics,
-                  tol_px: float = 3.0, curvature: bool = True) -> np.ndarray:
-    """(N,) bool: True where no point projects above the image skyline by more than ``tol_px``.
+                  tol_px: float = 5.0, position_slack_m: float = 150.0, curvature: bool = True) -> np.ndarray:
+    """(N,) bool: True where no point projects above the image skyline by more than a tolerance.
 
     poses : (N, 6); points : (F, 3) world points (m); skyline : (W,) v per column
     (NaN: the column sees only sky, so any terrain point in its visible part is a violation).
+    The tolerance is ``tol_px`` plus what ``position_slack_m`` of camera position error
+    moves a point at its distance d: f * slack / d px. A hypothesis' pose is only as
+    good as its three matched summits, and a near point moves a lot.
     """
     W, H = intrinsics.width, intrinsics.height
-    limit = np.where(np.isfinite(skyline), skyline - tol_px, H)  # v must not be smaller than this
+    sky = np.where(np.isfinite(skyline), skyline, H)  # v must not be smaller than this, less the tolerance
     ok = np.ones(len(poses), dtype=bool)
     chunk = max(1, CHUNK_PROJECTIONS // max(len(points), 1))
     for s in range(0, len(poses), chunk):
-        uv, front = project(points, poses[s : s + chunk], intrinsics, curvature)
+        batch = poses[s : s + chunk]
+        uv, front = project(points, batch, intrinsics, curvature)
         u, v = uv[..., 0], uv[..., 1]
         inside = front & (u >= 0) & (u < W)
         col = np.clip(np.where(inside, u, 0), 0, W - 1).astype(np.int64)
-        above = inside & (v < limit[col])
+        distance = np.hypot(points[None, :, 0] - batch[:, None, 0], points[None, :, 1] - batch[:, None, 1])
+        tol = tol_px + intrinsics.f_px * position_slack_m / np.maximum(distance, 1.0)
+        above = inside & (v < sky[col] - tol)
         ok[s : s + chunk] = ~above.any(axis=1)
     return ok
-
-
-def features_visible(terrain: Terrain, poses: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """(N,) bool: the camera of each pose (N, 6) has a clear line of sight to all its
-    matched points (N, 3, 3)."""
-    N = len(poses)
-    if N == 0:
-        return np.zeros(0, dtype=bool)
-    cams = np.repeat(poses[:, :3], 3, axis=0)
-    clear = line_of_sight(terrain, cams, points.reshape(-1, 3))
-    return clear.reshape(N, 3).all(axis=1)
 
 
 def segments_in_sky(peak_uv: np.ndarray, skyline: np.ndarray, tol_px: float = 1.0) -> np.ndarray:
@@ -92,7 +86,8 @@ def interfeature_visibility(terrain: Terrain, image_triples: np.ndarray, feature
     lo, hi = np.minimum(fa, fb), np.maximum(fa, fb)
     F = len(features_xyz)
     keys, inverse = np.unique(lo * F + hi, return_inverse=True)
-    clear = line_of_sight(terrain, features_xyz[keys // F], features_xyz[keys % F])
+    # summits 10 m up: both ends graze the skyline, and a segment along a ridge should pass
+    clear = line_of_sight(terrain, features_xyz[keys // F], features_xyz[keys % F], lift_m=10.0)
     blocked = np.zeros(need.shape, dtype=bool)
     blocked[need] = ~clear[inverse]
     return ~blocked.any(axis=1)

@@ -19,7 +19,7 @@ from ..errors import InputError
 from ..features import ExtractedSkyline, extract_skyline, load_photo, skyline_peaks
 from ..model import Model
 from ..render import Terrain
-from .constraints import features_visible, interfeature_visibility, segments_in_sky, skyline_limit
+from .constraints import interfeature_visibility, segments_in_sky, skyline_limit
 from .hypotheses import generate_hypotheses
 from .pose_solver import solve_poses
 from .refinement import Refined, refine_pose
@@ -31,14 +31,15 @@ FOV_CANDIDATES = (30.0, 40.0, 50.0, 60.0, 70.0)
 
 @dataclass(frozen=True)
 class LocalizeParams:
-    n_peaks: int = 6  # image peaks taken (the paper's top N)
+    n_peaks: int = 8  # image peaks taken (the paper's top N)
     residual_px: float = 2.0  # reprojection cut-off of the three-point fit
-    limit_tol_px: float = 3.0  # "skyline is the limit" tolerance
-    chunk: int = 20_000  # hypotheses solved per batch
+    limit_tol_px: float = 5.0  # "skyline is the limit" tolerance (plus f * 150 m / distance)
+    chunk: int = 50_000  # hypotheses solved per batch
     verify_stride: int = 4  # every n-th column in the verification renders
     refine_per_chunk: int = 1  # best new candidates refined after each chunk
     final_refinements: int = 3  # distinct candidates refined at the end
-    accept_agreement: float = 0.9  # stop early once a refined pose agrees this well
+    accept_score_px: float = 0.3  # stop early once a refined pose scores this well...
+    accept_agreement: float = 0.95  # ...and agrees on this share of columns
     min_confidence: float = 0.5  # abstain below this
     same_pose_m: float = 150.0  # candidates closer than this (and same heading) are one
     ordered: bool = True  # probabilistic ordering (False: a seeded arbitrary order)
@@ -50,7 +51,7 @@ class LocalizeStats:
     generated: int = 0
     evaluated: int = 0
     rejected: dict = field(default_factory=lambda: {"residual": 0, "geometry": 0, "skyline_limit": 0,
-                                                    "camera_visibility": 0, "interfeature_visibility": 0})
+                                                    "interfeature_visibility": 0})
     verified: int = 0
     refined: int = 0
     seconds: dict = field(default_factory=dict)
@@ -152,7 +153,7 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     model : the model databases of the DEM (:func:`skyrender.model.build_model`).
     height : camera height above ground (m).
     fov : horizontal field of view (degrees); None = unknown, estimated.
-    prior : None, or a dict for :meth:`Model.pivots_for_prior` ("mountain X visible":
+    prior : None, or a dict for :meth:`Model.features_for_prior` ("mountain X visible":
         ``{"ids": [...]}`` or ``{"x": .., "y": .., "radius": ..}``).
     terrain : a Terrain of ``model.dem`` to reuse; skyline : the photo's skyline
         (an ExtractedSkyline or a (W,) array) when already extracted.
@@ -181,8 +182,8 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
         return abstain()
     tick = time.perf_counter()
     peak_uv = np.array([[p.u, p.v] for p in peaks])
-    pivots = model.pivots_for_prior(**prior) if prior else None
-    hyps = generate_hypotheses(peak_uv[:, 0], np.array([p.size for p in peaks]), model, pivots, params.ordered)
+    allowed = model.features_for_prior(**prior) if prior else None
+    hyps = generate_hypotheses(peak_uv[:, 0], np.array([p.size for p in peaks]), model, allowed, params.ordered)
     in_sky = segments_in_sky(peak_uv, sky)
     stats.generated = len(hyps) * len(fovs)
     features = model.features.xyz
@@ -206,12 +207,10 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
             k_i = Intrinsics(W, H, f_px, W / 2.0, H / 2.0)
             idx = _apply(idx, _geometry_ok(poses[idx], features[chunk.features[idx]], k_i, curvature), stats,
                          "geometry")
-            idx = _apply(idx, skyline_limit(poses[idx], features, sky, k_i, params.limit_tol_px, curvature), stats,
+            idx = _apply(idx, skyline_limit(poses[idx], features, sky, k_i, params.limit_tol_px, curvature=curvature), stats,
                          "skyline_limit")
             stats.add_time("constraints", time.perf_counter() - tick)
             tick = time.perf_counter()
-            idx = _apply(idx, features_visible(terrain, poses[idx], features[chunk.features[idx]]), stats,
-                         "camera_visibility")
             idx = _apply(idx, interfeature_visibility(terrain, chunk.image[idx], chunk.features[idx], features,
                                                       in_sky), stats, "interfeature_visibility")
             stats.add_time("visibility", time.perf_counter() - tick)
@@ -234,15 +233,17 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
             _refine(cand, terrain, intrinsics, height, sky, weights, fov is None, params, stats)
         stats.add_time("refinement", time.perf_counter() - tick)
         done = [c for c in candidates if c.refined is not None]
-        if done and max(c.refined.agreement for c in done) >= params.accept_agreement:
-            accepted = max(done, key=lambda c: c.refined.agreement)
+        good = [c for c in done if c.refined.score <= params.accept_score_px
+                and c.refined.agreement >= params.accept_agreement]
+        if good:
+            accepted = min(good, key=lambda c: c.refined.score)
             break
 
     tick = time.perf_counter()
     for cand in [c for c in candidates if c.refined is None][: max(0, params.final_refinements - stats.refined)]:
         _refine(cand, terrain, intrinsics, height, sky, weights, fov is None, params, stats)
     stats.add_time("refinement", time.perf_counter() - tick)
-    done = sorted([c for c in candidates if c.refined is not None], key=lambda c: -c.refined.agreement)
+    done = sorted([c for c in candidates if c.refined is not None], key=lambda c: c.refined.score)
     if not done:
         return abstain()
     best = accepted or done[0]

@@ -103,6 +103,26 @@ def horizontal_angles(measured: np.ndarray, elevations: np.ndarray) -> np.ndarra
     return np.stack(out, axis=1)
 
 
+def plausible_positions(dem: DEM, xy: np.ndarray, world: np.ndarray, measured: np.ndarray,
+                        min_distance_m: float = 100.0) -> np.ndarray:
+    """(N,) bool: a first position estimate worth refining — on the DEM, not on top of
+    a point, and seeing the points left to right (clockwise) at angles near the measured ones.
+
+    The closed form meets both circles also on their other arcs, where the points appear
+    in the wrong order; and its angles are 3-D ones, so a loose tolerance applies.
+    """
+    ok = np.isfinite(xy).all(axis=1)
+    ok[ok] = dem.contains(xy[ok, 0], xy[ok, 1])
+    dx = world[..., 0] - xy[:, None, 0]
+    dy = world[..., 1] - xy[:, None, 1]
+    ok &= np.all(dx * dx + dy * dy >= min_distance_m**2, axis=1)
+    az = np.arctan2(dx, dy)  # clockwise from north
+    for (i, j), k in (((0, 1), 0), ((1, 2), 1)):
+        turn = (az[:, j] - az[:, i]) % (2 * np.pi)
+        ok &= (turn < np.pi) & (np.abs(turn - measured[:, k]) <= 0.5 * measured[:, k] + np.radians(1.0))
+    return ok
+
+
 def _camera_centres(dem: DEM, xy: np.ndarray, height: float) -> np.ndarray:
     return np.concatenate([xy, (dem.ground(xy[..., 0], xy[..., 1]) + height)[..., None]], axis=-1)
 
@@ -217,6 +237,14 @@ def solve_poses(dem: DEM, image_uv: np.ndarray, world: np.ndarray, height: float
     # closed form on the 3-D angles, then again on horizontal angles from the elevations
     # the points show from the last estimate (a fixed point that settles in a few rounds)
     xy = resection_2d(world[:, :, :2], measured[:, 0], measured[:, 1])
+    poses = np.full((N, 6), np.nan)
+    residual = np.full(N, np.inf)
+    # most hypotheses are hopeless already here: continue with the plausible ones only
+    keep = np.flatnonzero(plausible_positions(dem, xy, world, measured))
+    if len(keep) == 0:
+        return poses, residual
+    xy, world, measured, bearings, f = xy[keep], world[keep], measured[keep], bearings[keep], f[keep]
+    image_uv = np.asarray(image_uv, dtype=np.float64)[keep]
     for _ in range(RESECTION_ROUNDS):
         dirs = _world_directions(world, _camera_centres(dem, xy, height), c)
         flat = horizontal_angles(measured, np.arcsin(np.clip(dirs[..., 2], -1.0, 1.0)))
@@ -224,21 +252,22 @@ def solve_poses(dem: DEM, image_uv: np.ndarray, world: np.ndarray, height: float
                       resection_2d(world[:, :, :2], flat[:, 0], flat[:, 1]), xy)
     xy = refine_positions(dem, xy, world, measured, height, c)
     centres = _camera_centres(dem, xy, height)
-    ok = np.all(np.isfinite(centres), axis=1)
-    poses = np.full((N, 6), np.nan)
-    residual = np.full(N, np.inf)
+    ok = np.zeros(N, dtype=bool)
+    ok[keep] = np.all(np.isfinite(centres), axis=1)
     if not ok.any():
         return poses, residual
-    dirs = _world_directions(world[ok], centres[ok], c)
-    R = rotations_from_bearings(bearings[ok], dirs)
-    poses[ok, :3] = centres[ok]
+    centres = centres[ok[keep]]
+    bearings, f, image_uv, world = bearings[ok[keep]], f[ok[keep]], image_uv[ok[keep]], world[ok[keep]]
+    dirs = _world_directions(world, centres, c)
+    R = rotations_from_bearings(bearings, dirs)
+    poses[ok, :3] = centres
     poses[ok, 3:] = angles_from_rotations(R)
     # reprojection: camera-frame coordinates of the world directions
     cam = (R[:, None, :, :] * dirs[:, :, :, None]).sum(axis=2)  # R^T w: (n, 3 points, right/up/forward)
     with np.errstate(divide="ignore", invalid="ignore"):
-        u = cx + f[ok, None] * cam[..., 0] / cam[..., 2]
-        v = cy - f[ok, None] * cam[..., 1] / cam[..., 2]
-    err = np.sqrt(np.mean((u - image_uv[ok, :, 0]) ** 2 + (v - image_uv[ok, :, 1]) ** 2, axis=1))
+        u = cx + f[:, None] * cam[..., 0] / cam[..., 2]
+        v = cy - f[:, None] * cam[..., 1] / cam[..., 2]
+    err = np.sqrt(np.mean((u - image_uv[:, :, 0]) ** 2 + (v - image_uv[:, :, 1]) ** 2, axis=1))
     err[~np.all(cam[..., 2] > 0, axis=1)] = np.inf
     residual[ok] = np.where(np.isfinite(err), err, np.inf)
     return poses, residual

@@ -22,7 +22,8 @@ from scipy.optimize import least_squares
 
 from ..camera import Intrinsics
 from ..render import Terrain, render_skylines
-from .verification import ScoreParams, column_errors, score_skylines
+from ..render.visibility import line_of_sight
+from .verification import ScoreParams, align_skylines, column_errors, score_skylines, strided_intrinsics
 
 #: Forward-difference steps: metres for x, y; degrees for the angles; relative for f.
 STEP_XY_M = 2.0
@@ -43,89 +44,79 @@ class Refined:
     evaluations: int
 
 
-#: Local search: grid half-widths (m), 7 x 7 positions each; alignment shifts (px).
-SEARCH_RADII_M = (160.0, 45.0, 12.0, 3.0)
-SEARCH_POINTS = 7
-SHIFTS_PX = np.arange(-12.0, 12.01, 0.5)
-
-
-def align_skylines(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx: float, weights: np.ndarray,
-                   shifts: np.ndarray = SHIFTS_PX, params: ScoreParams = ScoreParams()):
-    """Best 2-D alignment of rendered skylines (P, n) to the photo's (n,), both sampled
-    at image columns ``columns`` (u = column + 0.5): the rendered curve moved right by
-    ``a`` px and by ``b + c (u - cx)`` px down, a from ``shifts``, b and c by weighted
-    least squares. Returns (score (P,), a (P,), b (P,), c (P,)).
-    """
-    u = columns + 0.5
-    P = len(rendered)
-    step = u[1] - u[0] if len(u) > 1 else 1.0
-    best = (np.full(P, np.inf), np.zeros(P), np.zeros(P), np.zeros(P))
-    x = u - cx
-    for a in shifts:
-        # rendered value at u - a, linear between samples (NaN stays NaN)
-        pos = (u - a - u[0]) / step
-        i0 = np.clip(np.floor(pos).astype(np.int64), 0, len(u) - 1)
-        i1 = np.clip(i0 + 1, 0, len(u) - 1)
-        t = np.clip(pos - i0, 0.0, 1.0)
-        moved = rendered[:, i0] * (1 - t) + rendered[:, i1] * t
-        moved[:, (pos < 0) | (pos > len(u) - 1)] = np.nan
-        d = image[None, :] - moved
-        w = np.where(np.isfinite(d), weights[None, :], 0.0)
-        d0 = np.where(np.isfinite(d), d, 0.0)
-        # robust line fit: least squares, then again without the columns beyond 3 px
-        for _ in range(2):
-            sw, sx, sxx = w.sum(1), (w * x).sum(1), (w * x * x).sum(1)
-            sy, sxy = (w * d0).sum(1), (w * x * d0).sum(1)
-            det = np.maximum(sw * sxx - sx * sx, 1e-9)
-            c = (sw * sxy - sx * sy) / det
-            b = (sy - c * sx) / np.maximum(sw, 1e-9)
-            w = np.where(np.abs(d0 - b[:, None] - c[:, None] * x) <= 3.0, w, 0.0) * np.isfinite(d)
-        score, _ = score_skylines(moved + b[:, None] + c[:, None] * x, image, weights, params)
-        better = score < best[0]
-        best = tuple(np.where(better, new, old) for new, old in zip((score, np.full(P, a), b, c), best))
-    return best
+#: Local search levels: half-widths (m) along and across the line of sight, and grid
+#: points (along x across). A three-point pose is often some hundreds of metres off
+#: along the line of sight (the resection is ill-conditioned in depth), much less across.
+SEARCH_LEVELS = ((640.0, 160.0, 65, 9), (40.0, 40.0, 5, 5), (12.0, 12.0, 5, 5), (3.0, 3.0, 5, 5))
+SEARCH_BEAM = 3
+#: At most this many positions per seed and level are rendered (evenly thinned).
+SEARCH_MAX_POSES = 200
 
 
 def local_search(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, height: float,
                  image_skyline: np.ndarray, weights: np.ndarray, f_px: float, stride: int = 2,
+                 points: np.ndarray | None = None, beam: int = SEARCH_BEAM,
                  params: ScoreParams = ScoreParams()) -> tuple[np.ndarray, int]:
-    """Coarse-to-fine grid search over (x, y) with the orientation re-aligned per
-    position (:func:`align_skylines`); returns the improved pose and the renders used."""
+    """Coarse-to-fine grid search over (x, y), elongated along the line of sight, with
+    the orientation re-aligned per position (:func:`align_skylines`). The ``beam`` best
+    positions of each level (at least a grid step apart) seed the next: the score is
+    flat along the line of sight and one seed can fall into the wrong dip.
+    ``points`` (n, 3): the hypothesis' matched feature points; positions from which
+    one of them is hidden are not rendered (a camera 2 m up sees its peaks from
+    narrow strips of ground only). Returns the best pose and the number of renders used."""
     dem = terrain.dem
-    cols = np.arange(stride // 2, intrinsics.width, stride)
-    k = np.array([f_px, intrinsics.cx, intrinsics.cy])
-    pose = np.asarray(pose, np.float64).copy()
+    small, cols = strided_intrinsics(intrinsics, stride)
+    k = np.array([f_px / stride, small.cx, small.cy])
+    seeds = [np.asarray(pose, np.float64).copy()]
     renders = 0
-    g = np.linspace(-1.0, 1.0, SEARCH_POINTS)
-    for radius in SEARCH_RADII_M:
-        gx, gy = np.meshgrid(g * radius, g * radius)
-        xy = pose[:2] + np.column_stack([gx.ravel(), gy.ravel()])
-        z = dem.ground(xy[:, 0], xy[:, 1]) + height
-        inside = np.isfinite(z)
-        poses = np.column_stack([xy, z, np.tile(pose[3:], (len(xy), 1))])[inside]
-        rendered = render_skylines(terrain, poses, intrinsics, per_pose_intrinsics=k, tol=0.1)[:, cols]
+    for along_m, across_m, n_along, n_across in SEARCH_LEVELS:
+        ga, gc = np.meshgrid(np.linspace(-along_m, along_m, n_along), np.linspace(-across_m, across_m, n_across))
+        ga, gc = ga.ravel(), gc.ravel()
+        grids = []
+        for seed in seeds:
+            pan = np.radians(seed[3])
+            xy = seed[:2] + np.column_stack([ga * np.sin(pan) + gc * np.cos(pan), ga * np.cos(pan) - gc * np.sin(pan)])
+            grid = np.column_stack([xy, dem.ground(xy[:, 0], xy[:, 1]) + height, np.tile(seed[3:], (len(xy), 1))])
+            grid = grid[np.isfinite(grid[:, 2])]
+            if points is not None and len(grid):
+                sees = line_of_sight(terrain, np.repeat(grid[:, :3], len(points), axis=0), np.tile(points, (len(grid), 1)))
+                grid = grid[sees.reshape(len(grid), len(points)).all(axis=1)]
+            if len(grid) > SEARCH_MAX_POSES:
+                grid = grid[np.linspace(0, len(grid) - 1, SEARCH_MAX_POSES).astype(np.int64)]
+            grids.append(grid)
+        poses = np.concatenate(grids)
+        if len(poses) == 0:
+            break
+        rendered = render_skylines(terrain, poses, small, per_pose_intrinsics=k, tol=0.1 / stride)
+        rendered = intrinsics.cy + stride * (rendered - small.cy)
         renders += len(poses)
-        score, a, b, c = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols],
-                                        params=params)
-        j = int(np.argmin(score))
-        pose = poses[j].copy()
-        # a shift right by a px is a pan left by a / f; down by b is a tilt up... see CONTRACT.md axes
-        pose[3] = (pose[3] - np.degrees(np.arctan(a[j] / f_px))) % 360.0
-        pose[4] = pose[4] + np.degrees(np.arctan(b[j] / f_px))
-        pose[5] = pose[5] - np.degrees(np.arctan(c[j]))
-    return pose, renders
+        score, _, a, b, c = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols],
+                                           params=params)
+        # the skyline moved right by a px = pan left by a / f; down by b = tilt up; slope c = swing -c
+        poses[:, 3] = (poses[:, 3] - np.degrees(np.arctan(a / f_px))) % 360.0
+        poses[:, 4] = poses[:, 4] + np.degrees(np.arctan(b / f_px))
+        poses[:, 5] = poses[:, 5] - np.degrees(np.arctan(c))
+        spacing = min(2 * across_m / max(n_across - 1, 1), 2 * along_m / max(n_along - 1, 1))
+        seeds = []
+        for j in np.argsort(score):
+            if len(seeds) == beam:
+                break
+            if all(np.hypot(*(poses[j, :2] - s_[:2])) >= spacing for s_ in seeds):
+                seeds.append(poses[j].copy())
+    return seeds[0], renders
 
 
 def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, height: float,
                 image_skyline: np.ndarray, weights: np.ndarray, *, fit_focal: bool = False,
                 f_px: float | None = None, max_nfev: int = 30, search: bool = True,
-                params: ScoreParams = ScoreParams()) -> Refined:
+                points: np.ndarray | None = None, params: ScoreParams = ScoreParams()) -> Refined:
     """Refine one pose (6,) against the photo's skyline (W,): local search, then least squares."""
     f0 = intrinsics.f_px if f_px is None else float(f_px)
     renders = 0
     pose = np.asarray(pose, np.float64)
     if search:
-        pose, renders = local_search(terrain, pose, intrinsics, height, image_skyline, weights, f0, params=params)
+        pose, renders = local_search(terrain, pose, intrinsics, height, image_skyline, weights, f0, points=points,
+                                     params=params)
     q = np.r_[pose[0], pose[1], pose[3], pose[4], pose[5], f0]
     for free in ([2, 3, 4], [0, 1, 2, 3, 4] + ([5] if fit_focal else [])):
         q, n = _least_squares(terrain, q, free, intrinsics, height, image_skyline, weights, max_nfev, params)

@@ -19,6 +19,10 @@ from ..camera import Intrinsics
 from ..render import Terrain, render_skylines
 
 
+#: Horizontal shifts (px) tried when aligning a rendered skyline to the photo's.
+SHIFTS_PX = np.arange(-30.0, 30.01, 1.0)
+
+
 @dataclass(frozen=True)
 class ScoreParams:
     cap_px: float = 20.0
@@ -47,6 +51,43 @@ def score_skylines(rendered: np.ndarray, image: np.ndarray, weights: np.ndarray,
     return score, agreement
 
 
+def align_skylines(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx: float, weights: np.ndarray,
+                   shifts: np.ndarray = SHIFTS_PX, params: ScoreParams = ScoreParams()):
+    """Best 2-D alignment of rendered skylines (P, n) to the photo's (n,), both sampled
+    at image columns ``columns`` (u = column + 0.5): the rendered curve moved right by
+    ``a`` px and by ``b + c (u - cx)`` px down, a from ``shifts``, b and c by weighted
+    least squares. Returns (score, agreement, a, b, c), each (P,).
+    """
+    u = columns + 0.5
+    P = len(rendered)
+    step = u[1] - u[0] if len(u) > 1 else 1.0
+    best = (np.full(P, np.inf), np.zeros(P), np.zeros(P), np.zeros(P), np.zeros(P))
+    x = u - cx
+    for a in shifts:
+        # rendered value at u - a, linear between samples (NaN stays NaN)
+        pos = (u - a - u[0]) / step
+        i0 = np.clip(np.floor(pos).astype(np.int64), 0, len(u) - 1)
+        i1 = np.clip(i0 + 1, 0, len(u) - 1)
+        t = np.clip(pos - i0, 0.0, 1.0)
+        moved = rendered[:, i0] * (1 - t) + rendered[:, i1] * t
+        moved[:, (pos < 0) | (pos > len(u) - 1)] = np.nan
+        d = image[None, :] - moved
+        w = np.where(np.isfinite(d), weights[None, :], 0.0)
+        d0 = np.where(np.isfinite(d), d, 0.0)
+        # robust line fit: least squares, then again without the columns beyond 3 px
+        for _ in range(2):
+            sw, sx, sxx = w.sum(1), (w * x).sum(1), (w * x * x).sum(1)
+            sy, sxy = (w * d0).sum(1), (w * x * d0).sum(1)
+            det = np.maximum(sw * sxx - sx * sx, 1e-9)
+            c = (sw * sxy - sx * sy) / det
+            b = (sy - c * sx) / np.maximum(sw, 1e-9)
+            w = np.where(np.abs(d0 - b[:, None] - c[:, None] * x) <= 3.0, w, 0.0) * np.isfinite(d)
+        score, agreement = score_skylines(moved + b[:, None] + c[:, None] * x, image, weights, params)
+        better = score < best[0]
+        best = tuple(np.where(better, new, old) for new, old in zip((score, agreement, np.full(P, a), b, c), best))
+    return best
+
+
 def strided_intrinsics(intrinsics: Intrinsics, stride: int) -> tuple[Intrinsics, np.ndarray]:
     """Intrinsics of a ``stride`` times smaller image whose column k samples the full
     image's column ``stride*k + stride//2`` exactly; returns them and those columns.
@@ -63,7 +104,12 @@ def strided_intrinsics(intrinsics: Intrinsics, stride: int) -> tuple[Intrinsics,
 def verify_poses(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, image_skyline: np.ndarray,
                  weights: np.ndarray, stride: int = 4, per_pose_f=None,
                  params: ScoreParams = ScoreParams()) -> tuple[np.ndarray, np.ndarray]:
-    """Score many poses (P, 6) on every ``stride``-th column; returns (score, agreement), each (P,)."""
+    """Score many poses (P, 6) on every ``stride``-th column; returns (score, agreement), each (P,).
+
+    A hypothesis' orientation is only as good as its three matched points, so each
+    rendered skyline is first aligned to the photo's (:func:`align_skylines`): the
+    score then judges the position, and refinement fixes the orientation.
+    """
     if len(poses) == 0:
         return np.zeros(0), np.zeros(0)
     small, cols = strided_intrinsics(intrinsics, stride)
@@ -74,4 +120,6 @@ def verify_poses(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, im
     # bisect to half a full-size pixel
     rendered = render_skylines(terrain, poses, small, subpixel=True, tol=0.5 / stride, per_pose_intrinsics=per_pose)
     rendered = intrinsics.cy + stride * (rendered - small.cy)
-    return score_skylines(rendered, image_skyline[cols], weights[cols], params)
+    score, agreement, *_ = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols],
+                                          params=params)
+    return score, agreement

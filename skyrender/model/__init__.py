@@ -36,5 +36,5 @@ def build_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None, 
     pivots = features.subset(features.major)
     neighbours = k_nearest_features(pivots.xyz[:, :2], features.xyz[:, :2], pivots.id, params.k)
     terrain = terrain or Terrain(dem)
-    covis = learn_covisibility(terrain, features.xyz, pivots.id, params.covisibility, progress=progress)
+    covis = learn_covisibility(terrain, features.xyz, params.covisibility, progress=progress)
     return Model(dem, params, features, neighbours, covis, time.perf_counter() - t0)

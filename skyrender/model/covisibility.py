@@ -33,7 +33,9 @@ class Covisibility:
 
     n_viewpoints : viewpoints sampled.
     seen : (F,) int, viewpoints where each feature is a skyline feature.
-    together : (P, F) int, viewpoints where pivot p and feature f both are.
+    together : (F, F) int, viewpoints where features f and g both are (symmetric;
+        the diagonal is ``seen``). The paper needs the pivots' rows; the localizer's
+        minor-peak triples use the rest.
     """
 
     n_viewpoints: int
@@ -47,7 +49,8 @@ class Covisibility:
     def p_given_pivot(self, pivot_index: np.ndarray) -> np.ndarray:
         """(P, F) P(feature | pivot); 0 where the pivot was never seen."""
         denom = self.seen[pivot_index][:, None].astype(np.float64)
-        return np.divide(self.together, denom, out=np.zeros(self.together.shape), where=denom > 0)
+        rows = self.together[pivot_index]
+        return np.divide(rows, denom, out=np.zeros(rows.shape), where=denom > 0)
 
 
 def viewpoint_grid(terrain: Terrain, spacing: float, height: float) -> np.ndarray:
@@ -85,19 +88,18 @@ def skyline_features(terrain: Terrain, cameras: np.ndarray, features: np.ndarray
     return out.reshape(V, F)
 
 
-def learn_covisibility(terrain: Terrain, features: np.ndarray, pivot_index: np.ndarray,
-                       params: CovisibilityParams = CovisibilityParams(), progress: bool = False,
-                       max_pairs: int = 2_000_000) -> Covisibility:
+def learn_covisibility(terrain: Terrain, features: np.ndarray, params: CovisibilityParams = CovisibilityParams(),
+                       progress: bool = False, max_pairs: int = 2_000_000) -> Covisibility:
     """Accumulate skyline-feature statistics over a grid of viewpoints.
 
-    features : (F, 3) feature points (m); pivot_index : (P,) rows of the pivots.
+    features : (F, 3) feature points (m).
     Deterministic; chunks of viewpoints bound the memory.
     """
     cameras = viewpoint_grid(terrain, params.spacing, params.height)
     cameras = cameras[np.isfinite(cameras[:, 2])]
     F = len(features)
     seen = np.zeros(F, dtype=np.int64)
-    together = np.zeros((len(pivot_index), F), dtype=np.int64)
+    together = np.zeros((F, F), dtype=np.int64)
     chunk = max(1, max_pairs // max(F, 1))
     starts = range(0, len(cameras), chunk)
     bar = None
@@ -111,8 +113,8 @@ def learn_covisibility(terrain: Terrain, features: np.ndarray, pivot_index: np.n
         for s in starts:
             sky = skyline_features(terrain, cameras[s : s + chunk], features, params)
             seen += sky.sum(axis=0)
-            piv = sky[:, pivot_index].astype(np.int64)
-            together += piv.T @ sky.astype(np.int64)
+            sky = sky.astype(np.float64)  # BLAS matmul; counts stay exact far beyond any grid
+            together += np.rint(sky.T @ sky).astype(np.int64)
             if bar is not None:
                 bar.update(task, advance=len(sky))
     finally:

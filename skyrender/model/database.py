@@ -5,7 +5,7 @@ grid, CRS and name, the build parameters, counts and build time.
 ``MODEL_DIR/arrays.npz`` — the DEM elevations (so a model localizes on its
 own), the Model Feature Point Database (id, x, y, z, lon, lat, row, col,
 prominence, major), the pivots, their k nearest feature points, and the
-co-visibility counts.
+co-visibility counts (every feature pair).
 
 A model whose format version, DEM fingerprint or parameters do not match
 what the caller expects is refused with a message saying so.
@@ -26,7 +26,7 @@ from .covisibility import Covisibility, CovisibilityParams
 from .peaks import PeakParams, PeakTable
 
 FORMAT = "skyrender-model"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: co-visibility counts for every feature pair, not only pivots'
 
 
 @dataclass(frozen=True)
@@ -71,29 +71,25 @@ class Model:
         nb = self.neighbours
         return np.where(nb >= 0, np.take_along_axis(cond, np.maximum(nb, 0), axis=1), 0.0)
 
-    def pivots_for_prior(self, ids=None, x: float | None = None, y: float | None = None,
-                         radius: float | None = None) -> np.ndarray:
-        """Pivot positions (indices into :attr:`pivots`) allowed by a prior
-        "mountain X is visible": given feature ids (a pivot, or a minor peak in a
-        pivot's neighbour set), or every pivot within ``radius`` metres of (x, y)."""
-        piv = self.pivots
-        allowed = np.zeros(len(piv), dtype=bool)
+    def features_for_prior(self, ids=None, x: float | None = None, y: float | None = None,
+                           radius: float | None = None) -> np.ndarray:
+        """(F,) bool: the feature points a prior "mountain X is visible" names — by
+        feature id, or every feature within ``radius`` metres of (x, y). All when no prior."""
+        f = self.features
+        if ids is None and x is None:
+            return np.ones(len(f), dtype=bool)
+        allowed = np.zeros(len(f), dtype=bool)
         if ids is not None:
             ids = np.asarray(list(ids), dtype=np.int64)
-            unknown = np.setdiff1d(ids, self.features.id)
+            unknown = np.setdiff1d(ids, f.id)
             if len(unknown):
                 raise InputError(f"unknown peak id(s) {', '.join(map(str, unknown[:5]))}")
-            allowed |= np.isin(self.features.id[piv], ids)
-            allowed |= np.isin(self.features.id[np.maximum(self.neighbours, 0)], ids).any(axis=1) & (
-                (self.neighbours >= 0).any(axis=1))
+            allowed |= np.isin(f.id, ids)
         if x is not None:
-            if y is None or radius is None or radius <= 0:
+            if y is None or radius is None or not radius > 0:
                 raise InputError("a position prior needs x, y and a positive radius")
-            d = np.hypot(self.features.x[piv] - x, self.features.y[piv] - y)
-            allowed |= d <= radius
-        if ids is None and x is None:
-            allowed[:] = True
-        return np.flatnonzero(allowed)
+            allowed |= np.hypot(f.x - x, f.y - y) <= radius
+        return allowed
 
     def summary(self) -> str:
         rows, cols = self.dem.shape
@@ -127,7 +123,8 @@ def save_model(model: Model, out_dir) -> None:
     arrays = {
         "elevation": model.dem.elevation, "id": f.id, "x": f.x, "y": f.y, "z": f.z, "lon": np.asarray(lon),
         "lat": np.asarray(lat), "row": f.row, "col": f.col, "prominence": f.prominence, "major": f.major,
-        "neighbours": model.neighbours, "seen": model.covisibility.seen, "together": model.covisibility.together,
+        "neighbours": model.neighbours, "seen": model.covisibility.seen,
+        "together": model.covisibility.together.astype(np.int32),
     }
     try:
         tmp = os.path.join(out_dir, "arrays.tmp.npz")
