@@ -199,6 +199,113 @@ def model(
         typer.echo(f"wrote {out} in {seconds:.1f} s (DEM load included)")
 
 
+@app.command()
+def localize(
+    image: Path = typer.Argument(..., help="photograph (PNG, JPEG, ...)"),
+    model_dir: Optional[Path] = typer.Option(None, "--model", help="model directory from 'skyrender model'"),
+    dem: Optional[str] = typer.Option(None, "--dem", help="DEM instead of a model: the model is built (and cached)"),
+    height: float = typer.Option(..., "--height", help="camera height above ground (m)"),
+    fov: Optional[float] = typer.Option(None, "--fov", help="horizontal field of view (deg); omit if unknown"),
+    json_out: bool = typer.Option(False, "--json", help="print the result as one JSON object"),
+    overlay: Optional[Path] = typer.Option(None, "--overlay", help="write the photo with both skylines and peaks"),
+    geojson: Optional[Path] = typer.Option(None, "--geojson", help="write the camera position and view cone"),
+    stats: bool = typer.Option(False, "--stats", help="print per-stage times and hypothesis counts (stderr)"),
+    prior_peak: Optional[list[int]] = typer.Option(None, "--prior-peak", help="id of a model peak known to be in view"),
+    prior_near: Optional[str] = typer.Option(None, "--prior-near", help="X,Y,RADIUS: a peak within RADIUS m is in view"),
+    unordered: bool = typer.Option(False, "--unordered", help="ignore the co-visibility ordering (for comparison)"),
+    flat_earth: bool = typer.Option(False, "--flat-earth", help="no earth curvature or refraction"),
+    crs: Optional[str] = CrsOpt,
+    cell_size: Optional[float] = CellOpt,
+    variant: Optional[str] = VariantOpt,
+):
+    """Estimate the camera pose (x, y, z, pan, tilt, swing) from one photograph.
+
+    Exit status 0: localized; 3: abstained (no pose it would stand behind)."""
+    from dataclasses import replace
+
+    from .features import load_photo
+    from .io import camera_geojson, write_json
+    from .localizer import LocalizeParams
+    from .localizer import localize as run_localize
+    from .render import Terrain
+    from .viz import localization_overlay, write_image
+
+    if (model_dir is None) == (dem is None):
+        raise InputError("give exactly one of --model MODEL_DIR and --dem DEM")
+    if not (np.isfinite(height) and height >= 0):
+        raise InputError(f"--height must be >= 0 m, got {height}")
+    if fov is not None and not (0 < fov < 180):
+        raise InputError(f"--fov must lie in (0, 180) degrees, got {fov}")
+    for path, option in ((overlay, "--overlay"), (geojson, "--geojson")):
+        if path is not None:
+            _check_writable(path, option)
+    prior = _parse_prior(prior_peak, prior_near)
+    photo = load_photo(image)
+    the_model = _load_or_build_model(model_dir, dem, crs, cell_size, variant)
+    terrain = Terrain(the_model.dem, curvature=not flat_earth, variant=variant)
+    params = replace(LocalizeParams(), ordered=not unordered)
+    result = run_localize(photo, the_model, height, fov, prior, terrain=terrain, params=params,
+                          curvature=not flat_earth)
+    if overlay is not None:
+        from .features import as_rgb8
+
+        write_image(overlay, localization_overlay(as_rgb8(photo), result, the_model))
+    if geojson is not None and result.localized:
+        write_json(geojson, camera_geojson(result.pose, result.fov, the_model.dem))
+    if stats:
+        st = result.stats.to_dict()
+        print(f"stats: {json.dumps(st)}", file=sys.stderr)
+    if json_out:
+        emit_json(result.to_json())
+    elif result.localized:
+        d = result.to_json()
+        where = f" (lat {d['lat']:.5f}, lon {d['lon']:.5f})" if d["lat"] is not None else ""
+        typer.echo(f"localized: x={d['x']:.1f} y={d['y']:.1f} z={d['z']:.1f}{where} pan={d['pan']:.2f} "
+                   f"tilt={d['tilt']:.2f} swing={d['swing']:.2f} fov={d['fov']:.2f}; confidence "
+                   f"{d['confidence']:.2f}; {d['hypotheses']} hypotheses in {d['seconds']:.1f} s")
+    else:
+        typer.echo(f"abstained: no pose found that fits the skyline well enough ({result.hypotheses} hypotheses, "
+                   f"{result.seconds:.1f} s)")
+    return 0 if result.localized else 3
+
+
+def _parse_prior(prior_peak, prior_near) -> dict | None:
+    prior: dict = {}
+    if prior_peak:
+        prior["ids"] = list(prior_peak)
+    if prior_near:
+        try:
+            x, y, r = (float(v) for v in prior_near.split(","))
+        except ValueError:
+            raise InputError(f"--prior-near must be X,Y,RADIUS in metres, got {prior_near!r}") from None
+        prior.update(x=x, y=y, radius=r)
+    return prior or None
+
+
+def _load_or_build_model(model_dir, dem, crs, cell_size, variant):
+    """The model from --model, or built from --dem and cached next to the user's cache."""
+    from .dem import load_dem
+    from .model import build_model, load_model, save_model
+
+    if model_dir is not None:
+        return load_model(model_dir)
+    terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
+    cache = Path(os.environ.get("SKYRENDER_CACHE", Path.home() / ".cache" / "skyrender")) / terrain_dem.fingerprint()
+    try:
+        return load_model(cache, dem=terrain_dem)
+    except InputError:
+        pass
+    from .backend import mitsuba
+
+    mitsuba(variant)
+    built = build_model(terrain_dem)
+    try:
+        save_model(built, cache)
+    except InputError:
+        pass  # no cache: the localization itself still runs
+    return built
+
+
 def _check_model_dir(path: Path) -> None:
     """Create the model directory now, so a bad --out fails before minutes of work."""
     if path.exists() and not path.is_dir():

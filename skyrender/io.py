@@ -42,3 +42,33 @@ def load_skyline(path) -> np.ndarray:
 def skyline_to_list(skyline) -> list:
     """JSON-ready list: floats, None for NaN."""
     return [None if not math.isfinite(v) else float(v) for v in np.asarray(skyline, dtype=np.float64)]
+
+
+def camera_geojson(pose, fov_deg: float, dem, view_distance_m: float = 10_000.0, crs: str | None = None) -> dict:
+    """GeoJSON FeatureCollection of a camera: its position (Point) and its view cone
+    (Polygon: the camera and the arc of the horizontal field of view at
+    ``view_distance_m``), in WGS 84 lon/lat when the DEM has a CRS, else in world x, y."""
+    x, y, z, pan, tilt, swing = (float(v) for v in pose)
+    angles = np.radians(pan + np.linspace(-fov_deg / 2, fov_deg / 2, 16))
+    ring = np.column_stack([np.r_[x, x + view_distance_m * np.sin(angles), x],
+                            np.r_[y, y + view_distance_m * np.cos(angles), y]])
+    point = np.array([[x, y]])
+    if dem.crs is not None:
+        ring = np.column_stack(dem.to_lonlat(ring[:, 0], ring[:, 1]))
+        point = np.column_stack(dem.to_lonlat(point[:, 0], point[:, 1]))
+    props = {"x": x, "y": y, "z": z, "pan": pan, "tilt": tilt, "swing": swing, "fov": fov_deg, "crs": crs or dem.crs}
+    return {"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {"kind": "camera", **props},
+         "geometry": {"type": "Point", "coordinates": [float(point[0, 0]), float(point[0, 1])]}},
+        {"type": "Feature", "properties": {"kind": "view cone", "distance_m": view_distance_m},
+         "geometry": {"type": "Polygon", "coordinates": [ring.tolist()]}}]}
+
+
+def write_json(path, obj: dict) -> None:
+    """Write a JSON document; InputError when it cannot be written."""
+    path = os.fspath(path)
+    try:
+        with open(path, "w") as fh:
+            json.dump(obj, fh, indent=1)
+    except OSError as exc:
+        raise InputError(f"cannot write {path}: {exc.strerror or exc}") from None

@@ -38,6 +38,7 @@ class LocalizeParams:
     verify_stride: int = 4  # every n-th column in the verification renders
     refine_per_chunk: int = 1  # best new candidates refined after each chunk
     final_refinements: int = 3  # distinct candidates refined at the end
+    max_refinements: int = 16  # refinements in all (each ~0.3 s)
     accept_score_px: float = 0.3  # stop early once a refined pose scores this well...
     accept_agreement: float = 0.95  # ...and agrees on this share of columns
     min_confidence: float = 0.5  # abstain below this
@@ -105,6 +106,7 @@ class _Candidate:
     f_px: float
     score: float
     agreement: float
+    points: np.ndarray  # (3, 3) the hypothesis' matched feature points
     refined: Refined | None = None
 
 
@@ -223,13 +225,15 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
             stats.verified += len(unique)
             stats.add_time("verification", time.perf_counter() - tick)
             for j in np.argsort(score)[: 4 * params.final_refinements]:
-                pose = poses[idx[unique[j]]]
-                if _distinct(candidates, pose, params.same_pose_m):
-                    candidates.append(_Candidate(pose, f_px, float(score[j]), float(agreement[j])))
+                h = idx[unique[j]]
+                if _distinct(candidates, poses[h], params.same_pose_m):
+                    candidates.append(_Candidate(poses[h], f_px, float(score[j]), float(agreement[j]),
+                                                 features[chunk.features[h]]))
         candidates.sort(key=lambda c: c.score)
         del candidates[8 * params.final_refinements:]
         tick = time.perf_counter()
-        for cand in [c for c in candidates if c.refined is None][: params.refine_per_chunk]:
+        budget = max(0, min(params.refine_per_chunk, params.max_refinements - stats.refined))
+        for cand in [c for c in candidates if c.refined is None][:budget]:
             _refine(cand, terrain, intrinsics, height, sky, weights, fov is None, params, stats)
         stats.add_time("refinement", time.perf_counter() - tick)
         done = [c for c in candidates if c.refined is not None]
@@ -240,7 +244,8 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
             break
 
     tick = time.perf_counter()
-    for cand in [c for c in candidates if c.refined is None][: max(0, params.final_refinements - stats.refined)]:
+    final = params.final_refinements if accepted is None else 0
+    for cand in [c for c in candidates if c.refined is None][:final]:
         _refine(cand, terrain, intrinsics, height, sky, weights, fov is None, params, stats)
     stats.add_time("refinement", time.perf_counter() - tick)
     done = sorted([c for c in candidates if c.refined is not None], key=lambda c: c.refined.score)
@@ -311,5 +316,5 @@ def _dedupe(poses: np.ndarray, cell_m: float = 50.0, cell_deg: float = 1.0) -> n
 
 def _refine(cand: _Candidate, terrain, intrinsics, height, sky, weights, fit_focal, params, stats) -> None:
     cand.refined = refine_pose(terrain, cand.pose, intrinsics, height, sky, weights, fit_focal=fit_focal,
-                               f_px=cand.f_px, params=params.score)
+                               f_px=cand.f_px, points=cand.points, params=params.score)
     stats.refined += 1

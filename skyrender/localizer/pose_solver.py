@@ -77,9 +77,9 @@ def resection_2d(points_xy: np.ndarray, angle_lm: np.ndarray, angle_mr: np.ndarr
     # clockwise left -> right is counter-clockwise right -> left
     o1 = centre(mid, left, angle_lm)
     o2 = centre(right, mid, angle_mr)
-    d = o2 - o1
-    dd = np.sum(d * d, axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        d = o2 - o1
+        dd = np.sum(d * d, axis=1)
         t = np.sum((mid - o1) * d, axis=1) / dd
         foot = o1 + t[:, None] * d
         out = 2.0 * foot - mid  # the middle point mirrored over the line of centres

@@ -118,17 +118,22 @@ def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, heig
         pose, renders = local_search(terrain, pose, intrinsics, height, image_skyline, weights, f0, points=points,
                                      params=params)
     q = np.r_[pose[0], pose[1], pose[3], pose[4], pose[5], f0]
+    stages = [q]
     for free in ([2, 3, 4], [0, 1, 2, 3, 4] + ([5] if fit_focal else [])):
         q, n = _least_squares(terrain, q, free, intrinsics, height, image_skyline, weights, max_nfev, params)
+        stages.append(q)
         renders += n
-    final, k = _pose_of(terrain.dem, q[None], height, intrinsics)
-    final = final[0]
-    final[3] %= 360.0
-    if not np.isfinite(final[2]):
+    # keep the best stage: a least-squares run on a rough score surface can end worse than it began
+    poses, k = _pose_of(terrain.dem, np.array(stages), height, intrinsics)
+    inside = np.isfinite(poses[:, 2])
+    if not inside.any():
         return Refined(pose, f0, np.inf, 0.0, renders)
-    rendered = render_skylines(terrain, final, intrinsics, per_pose_intrinsics=k)
-    score, agreement = score_skylines(rendered[None], image_skyline, weights, params)
-    return Refined(final, float(q[5]), float(score[0]), float(agreement[0]), renders)
+    rendered = render_skylines(terrain, poses[inside], intrinsics, per_pose_intrinsics=k[inside])
+    score, agreement = score_skylines(rendered, image_skyline, weights, params)
+    j = int(np.argmin(score))
+    final = poses[inside][j]
+    final[3] %= 360.0
+    return Refined(final, float(k[inside][j, 0]), float(score[j]), float(agreement[j]), renders)
 
 
 def _pose_of(dem, qs: np.ndarray, height: float, intrinsics: Intrinsics) -> tuple[np.ndarray, np.ndarray]:
