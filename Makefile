@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: install demo test bench bench-render bench-skyline clean
+.PHONY: install demo test bench bench-render bench-skyline bench-localize clean
 
 install: $(STAMP)
 
@@ -23,10 +23,13 @@ demo: install
 test: install
 	$(BIN)/python -m pytest -q
 
-bench: bench-render bench-skyline
+bench: bench-render bench-skyline bench-localize
 
 bench-skyline: install
 	$(BIN)/python -m skyrender.benchmarks.skyline_photos
+
+bench-localize: install
+	$(BIN)/python -m skyrender.benchmarks.localizer
 
 bench-render: install
 	$(BIN)/python -m skyrender.benchmarks.renderer

@@ -27,6 +27,7 @@ from ..render import Terrain, render_skylines
 @dataclass(frozen=True)
 class ViewSample:
     poses: list[Pose]
+    targets: list[int]  # feature-table row of the pivot each view is turned towards
     drawn: int  # candidate views drawn to find them
 
 
@@ -55,6 +56,7 @@ def sample_views(terrain: Terrain, model: Model, intrinsics: Intrinsics, n: int,
     margin = 0.05 * min(xmax - xmin, ymax - ymin)
     feats = model.features
     poses: list[Pose] = []
+    targets: list[int] = []
     drawn = 0
     while len(poses) < n and drawn < max_draws:
         drawn += 1
@@ -62,10 +64,10 @@ def sample_views(terrain: Terrain, model: Model, intrinsics: Intrinsics, n: int,
         cam = np.array([[x, y, float(dem.ground(x, y)) + height]])
         on_sky = np.flatnonzero(skyline_features(terrain, cam, feats.xyz, model.params.covisibility)[0])
         dist = np.hypot(feats.x[on_sky] - x, feats.y[on_sky] - y)
-        targets = on_sky[feats.major[on_sky] & (dist > 2000) & (dist < 15000)]
-        if len(targets) == 0:
+        pivots = on_sky[feats.major[on_sky] & (dist > 2000) & (dist < 15000)]
+        if len(pivots) == 0:
             continue
-        t = rng.choice(targets)
+        t = rng.choice(pivots)
         pan = np.degrees(np.arctan2(feats.x[t] - x, feats.y[t] - y)) + rng.uniform(-15.0, 15.0)
         swing = rng.uniform(-swing_deg, swing_deg) if swing_deg else 0.0
         level = dem.camera_pose(x, y, height, pan, 0.0, swing)
@@ -79,4 +81,5 @@ def sample_views(terrain: Terrain, model: Model, intrinsics: Intrinsics, n: int,
         sky = render_skylines(terrain, pose, intrinsics)
         if peaks_on_features(sky, pose, intrinsics, feats.xyz, n_peaks, match_px) >= min_matches:
             poses.append(pose)
-    return ViewSample(poses, drawn)
+            targets.append(int(t))
+    return ViewSample(poses, targets, drawn)

@@ -49,6 +49,25 @@ def skyline_limit(poses: np.ndarray, points: np.ndarray, skyline: np.ndarray, in
     return ok
 
 
+def prior_in_view(poses: np.ndarray, points: np.ndarray, skyline: np.ndarray, intrinsics: Intrinsics,
+                  tol_px: float = 5.0, curvature: bool = True) -> np.ndarray:
+    """(N,) bool: the pose shows at least one of ``points`` (F', 3) — the peaks a prior
+    says are in view — inside the image and not above the photo's skyline."""
+    ok = np.zeros(len(poses), dtype=bool)
+    if len(points) == 0 or len(poses) == 0:
+        return ok
+    W, H = intrinsics.width, intrinsics.height
+    sky = np.where(np.isfinite(skyline), skyline, H)
+    chunk = max(1, CHUNK_PROJECTIONS // len(points))
+    for s in range(0, len(poses), chunk):
+        uv, front = project(points, poses[s : s + chunk], intrinsics, curvature)
+        u, v = uv[..., 0], uv[..., 1]
+        inside = front & (u >= 0) & (u < W) & (v < H)
+        col = np.clip(np.where(inside, u, 0), 0, W - 1).astype(np.int64)
+        ok[s : s + chunk] = (inside & (v >= sky[col] - tol_px)).any(axis=1)
+    return ok
+
+
 def segments_in_sky(peak_uv: np.ndarray, skyline: np.ndarray, tol_px: float = 1.0) -> np.ndarray:
     """(n, n) bool: does the straight image segment between peaks i and j run through
     sky (at or above the skyline, within ``tol_px``) in every column it crosses?"""

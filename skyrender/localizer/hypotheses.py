@@ -25,6 +25,8 @@ from ..model import Model
 from ..model.neighbours import k_nearest_features
 
 PERMUTATIONS = np.array(list(permutations(range(3))), dtype=np.int64)  # (6, 3)
+#: Added to the log probability of triples holding a feature named by a prior.
+PRIOR_BOOST = 1000.0
 
 
 @dataclass(frozen=True)
@@ -63,11 +65,10 @@ def image_triples(peak_u: np.ndarray, peak_size: np.ndarray) -> tuple[np.ndarray
     return tri, log_w
 
 
-def model_triples(model: Model, allowed: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def model_triples(model: Model) -> tuple[np.ndarray, np.ndarray]:
     """(M, 3) feature rows (a, j, k) — j, k two of anchor a's k nearest feature
     points — each set once, and (M,) log P(a) P(j | a) P(k | a) (add-one smoothed).
 
-    allowed : optional (F,) bool from a prior; a triple must contain an allowed feature.
     Triples with a pair never co-visible in the model's statistics are dropped.
     """
     f = model.features
@@ -84,8 +85,6 @@ def model_triples(model: Model, allowed: np.ndarray | None = None) -> tuple[np.n
     ok = (j >= 0) & (kk >= 0)
     tri = tri[ok]
     ok = (T[tri[:, 0], tri[:, 1]] > 0) & (T[tri[:, 0], tri[:, 2]] > 0) & (T[tri[:, 1], tri[:, 2]] > 0)
-    if allowed is not None:
-        ok &= np.asarray(allowed, bool)[tri].any(axis=1)
     tri = tri[ok]
     seen = cov.seen.astype(np.float64)
     a = tri[:, 0]
@@ -99,14 +98,19 @@ def model_triples(model: Model, allowed: np.ndarray | None = None) -> tuple[np.n
 
 
 def generate_hypotheses(peak_u: np.ndarray, peak_size: np.ndarray, model: Model,
-                        allowed: np.ndarray | None = None, ordered: bool = True, seed: int = 0) -> Hypotheses:
+                        prior: np.ndarray | None = None, ordered: bool = True, seed: int = 0) -> Hypotheses:
     """Every (image triple x model triple x assignment), most probable first.
 
+    prior : optional (F,) bool, the feature points a prior says are in view: triples
+        holding one come first (the prior named peak may still not be among the
+        photo's largest skyline peaks, so the others follow).
     ``ordered=False`` gives the same set in a seeded arbitrary order (the
     baseline without the probabilistic ordering).
     """
     itri, log_w = image_triples(peak_u, peak_size)
-    mtri, log_m = model_triples(model, allowed)
+    mtri, log_m = model_triples(model)
+    if prior is not None:
+        log_m = log_m + PRIOR_BOOST * np.asarray(prior, bool)[mtri].any(axis=1)
     T, M, A = len(itri), len(mtri), len(PERMUTATIONS)
     if T == 0 or M == 0:
         return Hypotheses(np.zeros((0, 3), np.int64), np.zeros((0, 3), np.int64), np.zeros(0))

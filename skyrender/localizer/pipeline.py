@@ -19,7 +19,7 @@ from ..errors import InputError
 from ..features import ExtractedSkyline, extract_skyline, load_photo, skyline_peaks
 from ..model import Model
 from ..render import Terrain
-from .constraints import interfeature_visibility, segments_in_sky, skyline_limit
+from .constraints import interfeature_visibility, prior_in_view, segments_in_sky, skyline_limit
 from .hypotheses import generate_hypotheses
 from .pose_solver import solve_poses
 from .refinement import Refined, refine_pose
@@ -51,8 +51,8 @@ class LocalizeParams:
 class LocalizeStats:
     generated: int = 0
     evaluated: int = 0
-    rejected: dict = field(default_factory=lambda: {"residual": 0, "geometry": 0, "skyline_limit": 0,
-                                                    "interfeature_visibility": 0})
+    rejected: dict = field(default_factory=lambda: {"residual": 0, "geometry": 0, "prior": 0,
+                                                    "skyline_limit": 0, "interfeature_visibility": 0})
     verified: int = 0
     refined: int = 0
     seconds: dict = field(default_factory=dict)
@@ -156,7 +156,9 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     height : camera height above ground (m).
     fov : horizontal field of view (degrees); None = unknown, estimated.
     prior : None, or a dict for :meth:`Model.features_for_prior` ("mountain X visible":
-        ``{"ids": [...]}`` or ``{"x": .., "y": .., "radius": ..}``).
+        ``{"ids": [...]}``, or "a peak within radius of (x, y) is visible":
+        ``{"x": .., "y": .., "radius": ..}``). A pose must show one of those peaks
+        in its image; hypotheses built on them are tried first.
     terrain : a Terrain of ``model.dem`` to reuse; skyline : the photo's skyline
         (an ExtractedSkyline or a (W,) array) when already extracted.
 
@@ -184,8 +186,8 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
         return abstain()
     tick = time.perf_counter()
     peak_uv = np.array([[p.u, p.v] for p in peaks])
-    allowed = model.features_for_prior(**prior) if prior else None
-    hyps = generate_hypotheses(peak_uv[:, 0], np.array([p.size for p in peaks]), model, allowed, params.ordered)
+    in_view = model.features_for_prior(**prior) if prior else None
+    hyps = generate_hypotheses(peak_uv[:, 0], np.array([p.size for p in peaks]), model, in_view, params.ordered)
     in_sky = segments_in_sky(peak_uv, sky)
     stats.generated = len(hyps) * len(fovs)
     features = model.features.xyz
@@ -209,6 +211,9 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
             k_i = Intrinsics(W, H, f_px, W / 2.0, H / 2.0)
             idx = _apply(idx, _geometry_ok(poses[idx], features[chunk.features[idx]], k_i, curvature), stats,
                          "geometry")
+            if in_view is not None:
+                idx = _apply(idx, prior_in_view(poses[idx], features[in_view], sky, k_i, params.limit_tol_px,
+                                                curvature), stats, "prior")
             idx = _apply(idx, skyline_limit(poses[idx], features, sky, k_i, params.limit_tol_px, curvature=curvature), stats,
                          "skyline_limit")
             stats.add_time("constraints", time.perf_counter() - tick)
