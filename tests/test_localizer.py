@@ -167,3 +167,45 @@ def test_refinement_recovers_offset_poses(scene, views):
         assert r.score < 0.1 and r.agreement > 0.98
         assert np.abs((r.pose[3:] - truth.array()[3:] + 180) % 360 - 180).max() < 0.25
     assert max(errors) < 60.0 and min(errors) < 3.0
+
+
+# --- end to end on rendered photographs --------------------------------------------------
+# Thresholds: the views look at peaks 10-15 km away from 2 m above the ground, where
+# 50 m of camera position moves the re-oriented skyline by less than 0.1 px (see the
+# refinement test), so a localization is right within 60 m and 0.25 deg; the figures
+# the method reaches on a larger set are in the README (make bench-localize).
+POS_TOL_M, ANG_TOL_DEG = 60.0, 0.25
+
+
+def _photo(terrain, pose, intr=K, **look):
+    from skyrender.render.photo import Look, render_photo
+
+    return render_photo(terrain, pose, intr, Look(**look)).image
+
+
+def _assert_close(result, truth: Pose):
+    assert result.localized, f"abstained after {result.hypotheses} hypotheses"
+    t = truth.array()
+    assert np.hypot(*(result.pose[:2] - t[:2])) < POS_TOL_M
+    assert np.abs((result.pose[3:] - t[3:] + 180) % 360 - 180).max() < ANG_TOL_DEG
+    assert result.confidence >= LocalizeParams().min_confidence
+
+
+def test_localizes_a_photo_of_the_synthetic_scene_with_no_prior(scene, views):
+    dem, terrain, model = scene
+    pose = views.poses[2]
+    result = localize(_photo(terrain, pose), model, 2.0, 60.0, terrain=terrain)
+    _assert_close(result, pose)
+    assert result.hypotheses > 0 and result.stats.evaluated == result.hypotheses
+    doc = result.to_json()
+    assert doc["status"] == "localized" and doc["crs"] == "EPSG:32632" and -90 < doc["lat"] < 90
+    json.dumps(doc)  # serialisable as it is
+
+
+def test_abstains_on_an_all_sky_image(scene):
+    _, terrain, model = scene
+    sky = np.zeros((240, 320, 3), np.uint8)
+    sky[:] = (110, 160, 230)
+    result = localize(sky, model, 2.0, 60.0, terrain=terrain)
+    assert not result.localized and result.pose is None
+    assert result.to_json() == {"status": "abstained", "seconds": result.to_json()["seconds"], "hypotheses": 0}

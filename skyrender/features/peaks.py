@@ -19,16 +19,21 @@ from scipy.ndimage import gaussian_filter1d
 
 @dataclass(frozen=True)
 class SkylinePeak:
-    """u, v: apex (px, image coordinates); size: area (px^2); width: interval length (px)."""
+    """u, v: apex (px, image coordinates); size: area (px^2); width: interval length (px);
+    aspect: apex height over the interval's lower end, per half width (a conifer or a
+    post in front is far steeper than a mountain: aspect > 1.5)."""
 
     u: float
     v: float
     size: float
     width: float
+    aspect: float = 0.0
 
 
-def skyline_peaks(skyline: np.ndarray, n: int = 6, smooth_px: float = 2.0, min_size: float = 2.0) -> list[SkylinePeak]:
-    """The ``n`` largest peaks of a skyline (v per column, NaN = no terrain), largest first."""
+def skyline_peaks(skyline: np.ndarray, n: int = 6, smooth_px: float = 2.0, min_size: float = 2.0,
+                  max_aspect: float = np.inf) -> list[SkylinePeak]:
+    """The ``n`` largest peaks of a skyline (v per column, NaN = no terrain), largest first;
+    peaks steeper than ``max_aspect`` (foreground objects) left out."""
     sky = np.asarray(skyline, dtype=np.float64)
     W = len(sky)
     peaks: list[SkylinePeak] = []
@@ -61,6 +66,10 @@ def skyline_peaks(skyline: np.ndarray, n: int = 6, smooth_px: float = 2.0, min_s
             size = float(np.sum(np.clip(seg - chord, 0, None)))
             if size < min_size:
                 continue
-            peaks.append(SkylinePeak(float(start + k + offset + 0.5), float(-apex_h), size, float(b - a)))
+            if apex_h - min(h[a], h[b - 1]) > max_aspect * max(0.5 * (b - a), 1.0):
+                continue
+            rise = apex_h - min(h[a], h[b - 1])
+            peaks.append(SkylinePeak(float(start + k + offset + 0.5), float(-apex_h), size, float(b - a),
+                                     float(rise / max(0.5 * (b - a), 1.0))))
     peaks.sort(key=lambda p: -p.size)
     return peaks[:n]
