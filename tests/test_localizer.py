@@ -209,3 +209,74 @@ def test_abstains_on_an_all_sky_image(scene):
     result = localize(sky, model, 2.0, 60.0, terrain=terrain)
     assert not result.localized and result.pose is None
     assert result.to_json() == {"status": "abstained", "seconds": result.to_json()["seconds"], "hypotheses": 0}
+
+
+# --- command line ---------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def model_dir(scene, tmp_path_factory):
+    from skyrender.model import save_model
+
+    out = tmp_path_factory.mktemp("model")
+    save_model(scene[2], out)
+    return out
+
+
+def _run(capsys, args):
+    from skyrender.cli import main
+
+    code = main([str(a) for a in args])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def test_cli_localize_prints_the_contract_json_and_writes_overlay_and_geojson(scene, views, model_dir, tmp_path,
+                                                                             capsys):
+    from skyrender.viz import write_image
+
+    _, terrain, _ = scene
+    pose = views.poses[2]
+    write_image(tmp_path / "photo.png", _photo(terrain, pose))
+    code, out, err = _run(capsys, ["localize", tmp_path / "photo.png", "--model", model_dir, "--height", 2,
+                                   "--fov", 60, "--json", "--overlay", tmp_path / "o.png",
+                                   "--geojson", tmp_path / "cam.geojson", "--stats"])
+    assert code == 0, err
+    doc = json.loads(out)
+    assert set(doc) == {"status", "x", "y", "z", "pan", "tilt", "swing", "fov", "lat", "lon", "crs", "confidence",
+                        "seconds", "hypotheses"}
+    assert np.hypot(doc["x"] - pose.x, doc["y"] - pose.y) < POS_TOL_M
+    geo = json.loads((tmp_path / "cam.geojson").read_text())
+    lon, lat = geo["features"][0]["geometry"]["coordinates"]
+    assert lon == pytest.approx(doc["lon"]) and lat == pytest.approx(doc["lat"])
+    assert (tmp_path / "o.png").stat().st_size > 1000
+    stats = json.loads(err.split("stats: ", 1)[1])
+    assert stats["evaluated"] == doc["hypotheses"] and set(stats["rejected"]) >= {"residual", "skyline_limit",
+                                                                                  "interfeature_visibility"}
+
+
+def test_cli_localize_abstains_with_exit_3(model_dir, tmp_path, capsys):
+    from skyrender.viz import write_image
+
+    sky = np.zeros((240, 320, 3), np.uint8)
+    sky[:] = (110, 160, 230)
+    write_image(tmp_path / "sky.png", sky)
+    code, out, _ = _run(capsys, ["localize", tmp_path / "sky.png", "--model", model_dir, "--height", 2, "--json"])
+    assert code == 3 and json.loads(out)["status"] == "abstained"
+
+
+@pytest.mark.parametrize("case", ["no_model", "both", "negative_height", "bad_fov", "missing_image", "bad_prior",
+                                  "not_a_model"])
+def test_cli_localize_bad_input_is_one_line_and_exit_2(case, model_dir, tmp_path, capsys):
+    from skyrender.viz import write_image
+
+    img = tmp_path / "p.png"
+    write_image(img, np.full((60, 80, 3), 128, np.uint8))
+    args = {"no_model": [img, "--height", 2],
+            "both": [img, "--model", model_dir, "--dem", "builtin:jacksboro", "--height", 2],
+            "negative_height": [img, "--model", model_dir, "--height", -1],
+            "bad_fov": [img, "--model", model_dir, "--height", 2, "--fov", 200],
+            "missing_image": [tmp_path / "none.png", "--model", model_dir, "--height", 2],
+            "bad_prior": [img, "--model", model_dir, "--height", 2, "--prior-near", "1,2"],
+            "not_a_model": [img, "--model", tmp_path, "--height", 2]}[case]
+    code, out, err = _run(capsys, ["localize", *args])
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and err.startswith("skyrender: error:")
