@@ -280,3 +280,25 @@ def test_cli_localize_bad_input_is_one_line_and_exit_2(case, model_dir, tmp_path
     code, out, err = _run(capsys, ["localize", *args])
     assert code == 2 and out == ""
     assert len(err.strip().splitlines()) == 1 and err.startswith("skyrender: error:")
+
+
+def test_localizes_with_a_fifth_of_the_columns_occluded(scene, views):
+    """Trees and posts in front hide 20 % of the skyline columns; they raise the photo's
+    skyline, which the verification treats as possible occluders, and their steep bumps
+    are not taken as peaks."""
+    _, terrain, model = scene
+    pose = views.poses[2]
+    image = _photo(terrain, pose, occluders=0.2, seed=2)
+    result = localize(image, model, 2.0, 60.0, terrain=terrain)
+    _assert_close(result, pose)
+
+
+def test_abstains_on_terrain_that_is_not_in_the_model(scene, views):
+    """A photo of another mountain range (fractal seed 7) against this scene's model."""
+    _, _, model = scene
+    other = fractal_terrain(seed=7)
+    other_terrain = Terrain(other)
+    other_model = build_model(other, terrain=other_terrain)
+    pose = sample_views(other_terrain, other_model, K, 1, seed=4).poses[0]
+    result = localize(_photo(other_terrain, pose), model, 2.0, 60.0)
+    assert not result.localized and result.hypotheses > 100_000
