@@ -35,7 +35,7 @@ def scene():
 def views(scene):
     """Mountain views of the scene that satisfy the method's precondition (seeded)."""
     _, terrain, model = scene
-    return sample_views(terrain, model, K, 4, seed=1)
+    return sample_views(terrain, model, K, 5, seed=1)
 
 
 # --- stage 3b: pose from three correspondences ----------------------------------------
@@ -156,7 +156,7 @@ def test_refinement_recovers_offset_poses(scene, views):
     """
     dem, terrain, model = scene
     errors = []
-    for truth in views.poses:
+    for truth in views.poses[:4]:
         sky = render_skylines(terrain, truth, K)
         start = truth.array().copy()
         start[:2] += [60.0, -40.0]
@@ -302,3 +302,37 @@ def test_abstains_on_terrain_that_is_not_in_the_model(scene, views):
     pose = sample_views(other_terrain, other_model, K, 1, seed=4).poses[0]
     result = localize(_photo(other_terrain, pose), model, 2.0, 60.0)
     assert not result.localized and result.hypotheses > 100_000
+
+
+@pytest.mark.parametrize("swing", [-10.0, 10.0])
+def test_localizes_a_camera_rolled_by_ten_degrees(scene, views, swing):
+    dem, terrain, model = scene
+    p = views.poses[4]
+    pose = dem.camera_pose(p.x, p.y, 2.0, p.pan, p.tilt, swing)
+    result = localize(_photo(terrain, pose), model, 2.0, 60.0, terrain=terrain)
+    _assert_close(result, pose)
+
+
+def test_localizes_with_unknown_field_of_view(scene, views):
+    """fov=None: hypotheses for each candidate focal length, the focal length refined
+    with the pose. (A lens between the candidates is not found yet: see the README.)"""
+    _, terrain, model = scene
+    pose = views.poses[4]
+    result = localize(_photo(terrain, pose), model, 2.0, None, terrain=terrain)
+    _assert_close(result, pose)
+    assert result.fov == pytest.approx(60.0, abs=0.5)
+
+
+def test_localizes_on_a_real_dem():
+    """SRTM 30 m of Big Tujunga (San Gabriel Mountains): a rendered mountain view."""
+    from skyrender.dem import load_dem
+
+    from .conftest import data_path
+
+    dem = load_dem(data_path("dem", "srtm_bigtujunga30m_utm11.tif"))
+    terrain = Terrain(dem)
+    model = build_model(dem, terrain=terrain)
+    pose = sample_views(terrain, model, K, 4, seed=1).poses[3]
+    result = localize(_photo(terrain, pose), model, 2.0, 60.0, terrain=terrain)
+    _assert_close(result, pose)
+    assert result.crs == "EPSG:32611"

