@@ -18,7 +18,7 @@ from ..camera import Intrinsics
 from ..errors import InputError
 from ..features import ExtractedSkyline, extract_skyline, load_photo, skyline_peaks
 from ..model import Model
-from ..render import Terrain
+from ..render import Terrain, render_skylines
 from .constraints import interfeature_visibility, prior_in_view, segments_in_sky, skyline_limit
 from .hypotheses import generate_hypotheses
 from .pose_solver import solve_poses
@@ -215,8 +215,8 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
             if in_view is not None:
                 idx = _apply(idx, prior_in_view(poses[idx], features[in_view], sky, k_i, params.limit_tol_px,
                                                 curvature), stats, "prior")
-            idx = _apply(idx, skyline_limit(poses[idx], features, sky, k_i, params.limit_tol_px, curvature=curvature), stats,
-                         "skyline_limit")
+            idx = _apply(idx, skyline_limit(poses[idx], features, sky, k_i, params.limit_tol_px,
+                                            curvature=curvature), stats, "skyline_limit")
             stats.add_time("constraints", time.perf_counter() - tick)
             tick = time.perf_counter()
             idx = _apply(idx, interfeature_visibility(terrain, chunk.image[idx], chunk.features[idx], features,
@@ -265,8 +265,6 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
         return abstain()
     r = best.refined
     k_best = Intrinsics(W, H, r.f_px, W / 2.0, H / 2.0)
-    from ..render import render_skylines
-
     rendered = render_skylines(terrain, r.pose, k_best)
     lonlat = None
     if model.dem.crs is not None:

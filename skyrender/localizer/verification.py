@@ -102,7 +102,7 @@ def strided_intrinsics(intrinsics: Intrinsics, stride: int) -> tuple[Intrinsics,
 
 
 def verify_poses(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, image_skyline: np.ndarray,
-                 weights: np.ndarray, stride: int = 4, per_pose_f=None,
+                 weights: np.ndarray, stride: int = 4,
                  params: ScoreParams = ScoreParams()) -> tuple[np.ndarray, np.ndarray]:
     """Score many poses (P, 6) on every ``stride``-th column; returns (score, agreement), each (P,).
 
@@ -113,12 +113,8 @@ def verify_poses(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, im
     if len(poses) == 0:
         return np.zeros(0), np.zeros(0)
     small, cols = strided_intrinsics(intrinsics, stride)
-    per_pose = None
-    if per_pose_f is not None:
-        f = np.asarray(per_pose_f, np.float64) / stride
-        per_pose = np.column_stack([f, np.full(len(f), small.cx), np.full(len(f), small.cy)])
     # bisect to half a full-size pixel
-    rendered = render_skylines(terrain, poses, small, subpixel=True, tol=0.5 / stride, per_pose_intrinsics=per_pose)
+    rendered = render_skylines(terrain, poses, small, subpixel=True, tol=0.5 / stride)
     rendered = intrinsics.cy + stride * (rendered - small.cy)
     score, agreement, *_ = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols],
                                           params=params)
