@@ -35,7 +35,6 @@ def skyline_peaks(skyline: np.ndarray, n: int = 6, smooth_px: float = 2.0, min_s
     """The ``n`` largest peaks of a skyline (v per column, NaN = no terrain), largest first;
     peaks steeper than ``max_aspect`` (foreground objects) left out."""
     sky = np.asarray(skyline, dtype=np.float64)
-    W = len(sky)
     peaks: list[SkylinePeak] = []
     finite = np.isfinite(sky)
     # each finite run of columns is analysed on its own
