@@ -47,7 +47,8 @@ class Refined:
 #: Local search levels: half-widths (m) along and across the line of sight, and grid
 #: points (along x across). A three-point pose is often some hundreds of metres off
 #: along the line of sight (the resection is ill-conditioned in depth), much less across.
-SEARCH_LEVELS = ((640.0, 160.0, 65, 9), (40.0, 40.0, 5, 5), (12.0, 12.0, 5, 5), (3.0, 3.0, 5, 5))
+SEARCH_LEVELS = ((640.0, 160.0, 65, 9), (40.0, 40.0, 5, 5), (12.0, 12.0, 5, 5), (3.0, 3.0, 5, 5), (1.0, 1.0, 5, 5),
+                 (0.3, 0.3, 5, 5))  # the last two: a camera at a crest's edge sees its foreground change per metre
 SEARCH_BEAM = 3
 #: At most this many positions per seed and level are rendered (evenly thinned).
 SEARCH_MAX_POSES = 200
