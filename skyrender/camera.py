@@ -144,7 +144,8 @@ def project(points, poses, intrinsics: Intrinsics, curvature: bool = True):
 
     Parameters
     ----------
-    points : (N, 3) world points, metres.
+    points : (N, 3) world points, metres, seen by every pose; or (P, N, 3), each
+        pose its own N points.
     poses : Pose or (P, 6) array.
     intrinsics : Intrinsics (shared by all poses).
 
@@ -156,8 +157,10 @@ def project(points, poses, intrinsics: Intrinsics, curvature: bool = True):
     single = isinstance(poses, Pose) or np.ndim(poses) == 1
     pa = np.atleast_2d(as_pose_array(poses))
     points = np.atleast_2d(np.asarray(points, dtype=np.float64))
+    if points.ndim == 2:
+        points = points[None, :, :]
     right, up, fwd = camera_axes(pa[:, 3], pa[:, 4], pa[:, 5])
-    seen = lower_points(points[None, :, :], pa[:, None, :2], curvature)  # (P, N, 3)
+    seen = lower_points(points, pa[:, None, :2], curvature)  # (P, N, 3)
     c = seen - pa[:, None, :3]
     zc = np.einsum("pnk,pk->pn", c, fwd)
     xc = np.einsum("pnk,pk->pn", c, right)

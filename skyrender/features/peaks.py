@@ -65,10 +65,10 @@ def skyline_peaks(skyline: np.ndarray, n: int = 6, smooth_px: float = 2.0, min_s
             size = float(np.sum(np.clip(seg - chord, 0, None)))
             if size < min_size:
                 continue
-            if apex_h - min(h[a], h[b - 1]) > max_aspect * max(0.5 * (b - a), 1.0):
+            aspect = (apex_h - min(h[a], h[b - 1])) / max(0.5 * (b - a), 1.0)
+            if aspect > max_aspect:
                 continue
-            rise = apex_h - min(h[a], h[b - 1])
             peaks.append(SkylinePeak(float(start + k + offset + 0.5), float(-apex_h), size, float(b - a),
-                                     float(rise / max(0.5 * (b - a), 1.0))))
+                                     float(aspect)))
     peaks.sort(key=lambda p: -p.size)
     return peaks[:n]

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..camera import Intrinsics
+from ..camera import Intrinsics, project
 from ..errors import InputError
 from ..features import ExtractedSkyline, extract_skyline, load_photo, skyline_peaks
 from ..model import Model
@@ -199,17 +199,17 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     for start in range(0, len(hyps), params.chunk):
         chunk = hyps.take(slice(start, start + params.chunk))
         for fov_i in fovs:
-            f_px = Intrinsics.from_fov(fov_i, W, H).f_px
+            k_i = Intrinsics.from_fov(fov_i, W, H)
+            f_px = k_i.f_px
             tick = time.perf_counter()
             poses, residual = solve_poses(model.dem, peak_uv[chunk.image], features[chunk.features], height, f_px,
-                                          W / 2.0, H / 2.0, curvature)
+                                          k_i.cx, k_i.cy, curvature)
             stats.evaluated += len(chunk)
             stats.add_time("pose_solver", time.perf_counter() - tick)
             tick = time.perf_counter()
             keep = residual <= params.residual_px
             stats.rejected["residual"] += int((~keep).sum())
             idx = np.flatnonzero(keep)
-            k_i = Intrinsics(W, H, f_px, W / 2.0, H / 2.0)
             idx = _apply(idx, _geometry_ok(poses[idx], features[chunk.features[idx]], k_i, curvature), stats,
                          "geometry")
             if in_view is not None:
@@ -287,27 +287,11 @@ def _geometry_ok(poses: np.ndarray, points: np.ndarray, intrinsics: Intrinsics, 
         return ok
     out = np.zeros(len(poses), dtype=bool)
     sub = np.flatnonzero(ok)
-    uv = _own_projection(points[sub], poses[sub], intrinsics, curvature)
+    uv, _ = project(points[sub], poses[sub], intrinsics, curvature)
     u, v = uv[..., 0], uv[..., 1]
     inside = (u > -margin_px) & (u < intrinsics.width + margin_px) & (v > -margin_px) & (v < intrinsics.height + margin_px)
     out[sub] = np.all(inside & np.isfinite(u), axis=1)
     return out
-
-
-def _own_projection(points: np.ndarray, poses: np.ndarray, intrinsics: Intrinsics, curvature: bool) -> np.ndarray:
-    """(N, 3, 2) projections of each pose's own three points (N, 3, 3)."""
-    from ..camera import camera_axes, lower_points
-
-    right, up, fwd = camera_axes(poses[:, 3], poses[:, 4], poses[:, 5])
-    seen = lower_points(points, poses[:, None, :2], curvature)
-    c = seen - poses[:, None, :3]
-    zc = (c * fwd[:, None]).sum(-1)
-    xc = (c * right[:, None]).sum(-1)
-    yc = (c * up[:, None]).sum(-1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        u = np.where(zc > 0, intrinsics.cx + intrinsics.f_px * xc / zc, np.nan)
-        v = np.where(zc > 0, intrinsics.cy - intrinsics.f_px * yc / zc, np.nan)
-    return np.stack([u, v], axis=-1)
 
 
 def _dedupe(poses: np.ndarray, cell_m: float = 50.0, cell_deg: float = 1.0) -> np.ndarray:

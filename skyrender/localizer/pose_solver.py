@@ -145,12 +145,11 @@ def refine_positions(dem: DEM, xy: np.ndarray, world: np.ndarray, measured: np.n
     xy : (N, 2) start; world : (N, 3, 3) points; measured : (N, 3) angles (rad).
     Forward-difference Jacobian; the 2 x 2 normal equations are solved in closed form.
     """
-    xy = xy.copy()
-    # a step may go at most half-way to the nearest point
-    for _ in range(iterations):
-        def angles(p):
-            return _pair_angles(_world_directions(world, _camera_centres(dem, p, height), c))
+    def angles(p):
+        return _pair_angles(_world_directions(world, _camera_centres(dem, p, height), c))
 
+    xy = xy.copy()
+    for _ in range(iterations):
         a0 = angles(xy)
         jx = (angles(xy + (FD_STEP_M, 0.0)) - a0) / FD_STEP_M  # (N, 3)
         jy = (angles(xy + (0.0, FD_STEP_M)) - a0) / FD_STEP_M
@@ -161,15 +160,11 @@ def refine_positions(dem: DEM, xy: np.ndarray, world: np.ndarray, measured: np.n
         with np.errstate(divide="ignore", invalid="ignore"):
             dx = -(d * gx - b * gy) / det
             dy = -(a * gy - b * gx) / det
+        # a step may go at most half-way to the nearest point
         reach = 0.5 * np.min(np.hypot(world[..., 0] - xy[:, None, 0], world[..., 1] - xy[:, None, 1]), axis=1)
         scale = np.minimum(1.0, reach / np.maximum(np.hypot(dx, dy), 1e-9))
         xy = xy + np.stack([dx * scale, dy * scale], axis=1)
     return xy
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
-                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
 
 
 def _unit(a: np.ndarray) -> np.ndarray:
@@ -182,7 +177,7 @@ def _triad(v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     e1 = _unit(v[:, 0] + v[:, 1] + v[:, 2])
     spread = v[:, 2] - v[:, 0]
     e2 = _unit(spread - (spread * e1).sum(axis=1, keepdims=True) * e1)
-    return e1, e2, _cross(e1, e2)
+    return e1, e2, np.cross(e1, e2)
 
 
 def rotations_from_bearings(bearings: np.ndarray, directions: np.ndarray) -> np.ndarray:

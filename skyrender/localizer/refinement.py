@@ -109,15 +109,12 @@ def local_search(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, hei
 
 def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, height: float,
                 image_skyline: np.ndarray, weights: np.ndarray, *, fit_focal: bool = False,
-                f_px: float | None = None, max_nfev: int = 30, search: bool = True,
+                f_px: float | None = None, max_nfev: int = 30,
                 points: np.ndarray | None = None, params: ScoreParams = ScoreParams()) -> Refined:
     """Refine one pose (6,) against the photo's skyline (W,): local search, then least squares."""
     f0 = intrinsics.f_px if f_px is None else float(f_px)
-    renders = 0
-    pose = np.asarray(pose, np.float64)
-    if search:
-        pose, renders = local_search(terrain, pose, intrinsics, height, image_skyline, weights, f0, points=points,
-                                     params=params)
+    pose, renders = local_search(terrain, np.asarray(pose, np.float64), intrinsics, height, image_skyline, weights,
+                                 f0, points=points, params=params)
     q = np.r_[pose[0], pose[1], pose[3], pose[4], pose[5], f0]
     stages = [q]
     for free in ([2, 3, 4], [0, 1, 2, 3, 4] + ([5] if fit_focal else [])):

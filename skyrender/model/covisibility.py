@@ -32,15 +32,17 @@ class Covisibility:
     """Counts and probabilities over the sampled viewpoints.
 
     n_viewpoints : viewpoints sampled.
-    seen : (F,) int, viewpoints where each feature is a skyline feature.
-    together : (F, F) int, viewpoints where features f and g both are (symmetric;
-        the diagonal is ``seen``). The paper needs the pivots' rows; the localizer's
-        minor-peak triples use the rest.
+    together : (F, F) int, viewpoints where features f and g both are (symmetric).
+        The paper needs the pivots' rows; the localizer's minor-peak triples use the rest.
     """
 
     n_viewpoints: int
-    seen: np.ndarray
     together: np.ndarray
+
+    @property
+    def seen(self) -> np.ndarray:
+        """(F,) int, viewpoints where each feature is a skyline feature (the diagonal of ``together``)."""
+        return np.diagonal(self.together)
 
     def p_pivot(self, pivot_index: np.ndarray) -> np.ndarray:
         """P(pivot): share of viewpoints where each pivot is a skyline feature."""
@@ -98,7 +100,6 @@ def learn_covisibility(terrain: Terrain, features: np.ndarray, params: Covisibil
     cameras = viewpoint_grid(terrain, params.spacing, params.height)
     cameras = cameras[np.isfinite(cameras[:, 2])]
     F = len(features)
-    seen = np.zeros(F, dtype=np.int64)
     together = np.zeros((F, F), dtype=np.int64)
     chunk = max(1, max_pairs // max(F, 1))
     starts = range(0, len(cameras), chunk)
@@ -112,7 +113,6 @@ def learn_covisibility(terrain: Terrain, features: np.ndarray, params: Covisibil
     try:
         for s in starts:
             sky = skyline_features(terrain, cameras[s : s + chunk], features, params)
-            seen += sky.sum(axis=0)
             sky = sky.astype(np.float64)  # BLAS matmul; counts stay exact far beyond any grid
             together += np.rint(sky.T @ sky).astype(np.int64)
             if bar is not None:
@@ -120,4 +120,4 @@ def learn_covisibility(terrain: Terrain, features: np.ndarray, params: Covisibil
     finally:
         if bar is not None:
             bar.stop()
-    return Covisibility(len(cameras), seen, together)
+    return Covisibility(len(cameras), together)

@@ -123,8 +123,7 @@ def save_model(model: Model, out_dir) -> None:
     arrays = {
         "elevation": model.dem.elevation, "id": f.id, "x": f.x, "y": f.y, "z": f.z, "lon": np.asarray(lon),
         "lat": np.asarray(lat), "row": f.row, "col": f.col, "prominence": f.prominence, "major": f.major,
-        "neighbours": model.neighbours, "seen": model.covisibility.seen,
-        "together": model.covisibility.together.astype(np.int32),
+        "neighbours": model.neighbours, "together": model.covisibility.together.astype(np.int32),
     }
     try:
         tmp = os.path.join(out_dir, "arrays.tmp.npz")
@@ -171,5 +170,5 @@ def load_model(model_dir, dem: DEM | None = None, params: ModelParams | None = N
             raise InputError(f"model {model_dir} is corrupt: its DEM does not match its fingerprint")
     features = PeakTable(arrays["id"], arrays["x"], arrays["y"], arrays["z"], arrays["row"], arrays["col"],
                          arrays["prominence"], arrays["major"].astype(bool))
-    covis = Covisibility(int(meta["counts"]["viewpoints"]), arrays["seen"], arrays["together"])
+    covis = Covisibility(int(meta["counts"]["viewpoints"]), arrays["together"])
     return Model(dem, stored, features, arrays["neighbours"], covis, float(meta.get("build_seconds", 0.0)))
