@@ -167,6 +167,29 @@ def refine_positions(dem: DEM, xy: np.ndarray, world: np.ndarray, measured: np.n
     return xy
 
 
+def position_uncertainty(dem: DEM, xy: np.ndarray, world: np.ndarray, height: float, c: float,
+                         angle_noise_rad: float) -> tuple[np.ndarray, np.ndarray]:
+    """Axes and standard deviations (m) of a three-point position (x, y) when the
+    inter-bearing angles carry ``angle_noise_rad`` of noise.
+
+    xy : (2,) position; world : (3, 3) its matched points. From the Jacobian J of the
+    three angles with respect to (x, y): covariance = noise^2 (J^T J)^-1. Distant
+    peaks seen from 2 m leave hundreds of metres of doubt, and the long axis is
+    rarely the viewing direction. Returns (axes (2, 2), columns weak then strong;
+    sigma (2,) in metres, weak first).
+    """
+    def angles(p):
+        return _pair_angles(_world_directions(world[None], _camera_centres(dem, p[None], height), c))[0]
+
+    a0 = angles(xy)
+    J = np.column_stack([(angles(xy + (FD_STEP_M, 0.0)) - a0) / FD_STEP_M,
+                         (angles(xy + (0.0, FD_STEP_M)) - a0) / FD_STEP_M])
+    eig, axes = np.linalg.eigh(J.T @ J)  # ascending: weak axis first
+    with np.errstate(divide="ignore"):
+        sigma = angle_noise_rad / np.sqrt(np.maximum(eig, 0.0))
+    return axes, sigma
+
+
 def _unit(a: np.ndarray) -> np.ndarray:
     return a / np.sqrt((a * a).sum(axis=1, keepdims=True))
 
@@ -204,6 +227,19 @@ def angles_from_rotations(R: np.ndarray) -> np.ndarray:
     u0 = np.stack([-sp * st, -cp * st, ct], axis=1)
     swing = np.arctan2(-np.sum(right * u0, axis=1), np.sum(right * r0, axis=1))
     return np.column_stack([np.degrees(pan) % 360.0, np.degrees(tilt), np.degrees(swing)])
+
+
+def poses_at(dem: DEM, xy: np.ndarray, world: np.ndarray, bearings: np.ndarray, height: float,
+             c: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Poses (N, 6) standing at positions xy (N, 2), z = g + height, turned so that the
+    camera bearings (N, 3, 3) point at the world points (N, 3, 3).
+
+    Also returns the rotations (N, 3, 3) and the world directions (N, 3, 3) they used.
+    """
+    centres = _camera_centres(dem, xy, height)
+    dirs = _world_directions(world, centres, c)
+    R = rotations_from_bearings(bearings, dirs)
+    return np.column_stack([centres, angles_from_rotations(R)]), R, dirs
 
 
 def solve_poses(dem: DEM, image_uv: np.ndarray, world: np.ndarray, height: float, f_px, cx: float, cy: float,
@@ -246,17 +282,12 @@ def solve_poses(dem: DEM, image_uv: np.ndarray, world: np.ndarray, height: float
         xy = np.where(np.isfinite(flat).all(axis=1, keepdims=True),
                       resection_2d(world[:, :, :2], flat[:, 0], flat[:, 1]), xy)
     xy = refine_positions(dem, xy, world, measured, height, c)
-    centres = _camera_centres(dem, xy, height)
     ok = np.zeros(N, dtype=bool)
-    ok[keep] = np.all(np.isfinite(centres), axis=1)
+    ok[keep] = np.all(np.isfinite(xy), axis=1) & np.isfinite(dem.ground(xy[:, 0], xy[:, 1]))
     if not ok.any():
         return poses, residual
-    centres = centres[ok[keep]]
     bearings, f, image_uv, world = bearings[ok[keep]], f[ok[keep]], image_uv[ok[keep]], world[ok[keep]]
-    dirs = _world_directions(world, centres, c)
-    R = rotations_from_bearings(bearings, dirs)
-    poses[ok, :3] = centres
-    poses[ok, 3:] = angles_from_rotations(R)
+    poses[ok], R, dirs = poses_at(dem, xy[ok[keep]], world, bearings, height, c)
     # reprojection: camera-frame coordinates of the world directions
     cam = (R[:, None, :, :] * dirs[:, :, :, None]).sum(axis=2)  # R^T w: (n, 3 points, right/up/forward)
     with np.errstate(divide="ignore", invalid="ignore"):

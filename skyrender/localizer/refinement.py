@@ -20,9 +20,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from ..camera import Intrinsics
+from ..camera import Intrinsics, curvature_coeff, project
 from ..render import Terrain, render_skylines
 from ..render.visibility import line_of_sight
+from .pose_solver import image_bearings, position_uncertainty, poses_at
 from .verification import ScoreParams, align_skylines, column_errors, score_skylines, strided_intrinsics
 
 #: Forward-difference steps: metres for x, y; degrees for the angles; relative for f.
@@ -45,13 +46,81 @@ class Refined:
 
 
 #: Local search levels: half-widths (m) along and across the line of sight, and grid
-#: points (along x across). A three-point pose is often some hundreds of metres off
-#: along the line of sight (the resection is ill-conditioned in depth), much less across.
+#: points (along x across). Without matched points the first (wide) level finds the area.
 SEARCH_LEVELS = ((640.0, 160.0, 65, 9), (40.0, 40.0, 5, 5), (12.0, 12.0, 5, 5), (3.0, 3.0, 5, 5), (1.0, 1.0, 5, 5),
                  (0.3, 0.3, 5, 5))  # the last two: a camera at a crest's edge sees its foreground change per metre
 SEARCH_BEAM = 3
 #: At most this many positions per seed and level are rendered (evenly thinned).
 SEARCH_MAX_POSES = 200
+#: Resection sweep (with matched points): positions over the three-point position's
+#: uncertainty ellipse (:func:`position_uncertainty`, apex noise APEX_NOISE_PX) out to
+#: SWEEP_SIGMAS, half-widths clipped to SWEEP_HALF_WIDTH_M, SWEEP_SPACING_M apart (coarser
+#: when the ellipse would need more than SWEEP_MAX_POSES), each turned to its three
+#: points and rendered on every SWEEP_STRIDE-th column without alignment.
+APEX_NOISE_PX = 1.0
+SWEEP_SIGMAS = 2.5
+SWEEP_HALF_WIDTH_M = (30.0, 1200.0)
+SWEEP_SPACING_M = 10.0
+SWEEP_MAX_POSES = 6000
+SWEEP_STRIDE = 8
+
+
+def resection_sweep(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, height: float,
+                    image_skyline: np.ndarray, weights: np.ndarray, f_px: float, points: np.ndarray,
+                    beam: int = SEARCH_BEAM, params: ScoreParams = ScoreParams()) -> tuple[list[np.ndarray], float, int]:
+    """The ``beam`` best positions (at least one grid step apart) over the uncertainty
+    ellipse of a three-point pose, each turned to show its three points where ``pose``
+    shows them.
+
+    A camera a few metres above rough ground sees its foreground change within ten
+    metres, so the skyline matches only in a small dip, while three distant points
+    leave hundreds of metres of doubt, and not along the viewing direction: a dense
+    grid over that doubt, cheap renders, orientation from the points. Returns
+    (seeds, grid spacing in m, renders used)."""
+    dem = terrain.dem
+    c = curvature_coeff(terrain.curvature)
+    points = np.asarray(points, np.float64)
+    k_full = Intrinsics(intrinsics.width, intrinsics.height, f_px, intrinsics.cx, intrinsics.cy)
+    uv, _ = project(points, pose[None], k_full, terrain.curvature)
+    bearings = image_bearings(uv[0], f_px, intrinsics.cx, intrinsics.cy)
+    axes, sigma = position_uncertainty(dem, np.asarray(pose[:2], np.float64), points, height, c, APEX_NOISE_PX / f_px)
+    if not (np.all(np.isfinite(sigma)) and np.all(np.isfinite(bearings))):
+        return [pose], SWEEP_SPACING_M, 0
+    half = np.clip(SWEEP_SIGMAS * sigma, *SWEEP_HALF_WIDTH_M)
+    spacing = max(SWEEP_SPACING_M, float(np.sqrt(4 * half[0] * half[1] / SWEEP_MAX_POSES)))
+    n = np.maximum(3, np.ceil(2 * half / spacing).astype(int) + 1)
+    gw, gs = np.meshgrid(np.linspace(-half[0], half[0], n[0]), np.linspace(-half[1], half[1], n[1]))
+    xy = pose[:2] + gw.reshape(-1, 1) * axes[:, 0] + gs.reshape(-1, 1) * axes[:, 1]
+    xy = xy[np.isfinite(dem.ground(xy[:, 0], xy[:, 1]))]
+    if len(xy) == 0:
+        return [pose], spacing, 0
+    centres = np.column_stack([xy, dem.ground(xy[:, 0], xy[:, 1]) + height])
+    sees = line_of_sight(terrain, np.repeat(centres, len(points), axis=0), np.tile(points, (len(xy), 1)))
+    xy = xy[sees.reshape(len(xy), len(points)).all(axis=1)]
+    if len(xy) == 0:
+        return [pose], spacing, 0
+    n_pos = len(xy)
+    poses, _, _ = poses_at(dem, xy, np.broadcast_to(points, (n_pos, 3, 3)), np.broadcast_to(bearings, (n_pos, 3, 3)),
+                           height, c)
+    small, cols = strided_intrinsics(k_full, SWEEP_STRIDE)
+    rendered = render_skylines(terrain, poses, small, tol=0.25 / SWEEP_STRIDE)
+    rendered = intrinsics.cy + SWEEP_STRIDE * (rendered - small.cy)
+    score, _ = score_skylines(rendered, image_skyline[cols], weights[cols], params)
+    seeds: list[np.ndarray] = []
+    for j in np.argsort(score):
+        if len(seeds) == beam:
+            break
+        if all(np.hypot(*(poses[j, :2] - s_[:2])) >= spacing for s_ in seeds):
+            seeds.append(poses[j].copy())
+    return seeds, spacing, n_pos
+
+
+def _box_offsets(pose: np.ndarray, along_m: float, across_m: float, n_along: int, n_across: int) -> np.ndarray:
+    """(n, 2) world offsets (m) on a grid aligned with the pose's viewing direction (pan)."""
+    ga, gc = np.meshgrid(np.linspace(-along_m, along_m, n_along), np.linspace(-across_m, across_m, n_across))
+    ga, gc = ga.ravel(), gc.ravel()
+    pan = np.radians(pose[3])
+    return np.column_stack([ga * np.sin(pan) + gc * np.cos(pan), ga * np.cos(pan) - gc * np.sin(pan)])
 
 
 def local_search(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, height: float,
@@ -68,15 +137,16 @@ def local_search(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, hei
     dem = terrain.dem
     small, cols = strided_intrinsics(intrinsics, stride)
     k = np.array([f_px / stride, small.cx, small.cy])
-    seeds = [np.asarray(pose, np.float64).copy()]
-    renders = 0
-    for along_m, across_m, n_along, n_across in SEARCH_LEVELS:
-        ga, gc = np.meshgrid(np.linspace(-along_m, along_m, n_along), np.linspace(-across_m, across_m, n_across))
-        ga, gc = ga.ravel(), gc.ravel()
+    pose = np.asarray(pose, np.float64)
+    seeds, renders, levels = [pose.copy()], 0, SEARCH_LEVELS
+    if points is not None and len(points) == 3:
+        seeds, spacing, renders = resection_sweep(terrain, pose, intrinsics, height, image_skyline, weights, f_px,
+                                                  points, beam, params)
+        levels = [lv for lv in SEARCH_LEVELS if lv[0] <= 2 * spacing]
+    for level in levels:
         grids = []
         for seed in seeds:
-            pan = np.radians(seed[3])
-            xy = seed[:2] + np.column_stack([ga * np.sin(pan) + gc * np.cos(pan), ga * np.cos(pan) - gc * np.sin(pan)])
+            xy = seed[:2] + _box_offsets(seed, *level)
             grid = np.column_stack([xy, dem.ground(xy[:, 0], xy[:, 1]) + height, np.tile(seed[3:], (len(xy), 1))])
             grid = grid[np.isfinite(grid[:, 2])]
             if points is not None and len(grid):
@@ -97,7 +167,7 @@ def local_search(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, hei
         poses[:, 3] = (poses[:, 3] - np.degrees(np.arctan(a / f_px))) % 360.0
         poses[:, 4] = poses[:, 4] + np.degrees(np.arctan(b / f_px))
         poses[:, 5] = poses[:, 5] - np.degrees(np.arctan(c))
-        spacing = min(2 * across_m / max(n_across - 1, 1), 2 * along_m / max(n_along - 1, 1))
+        spacing = min(2 * level[1] / max(level[3] - 1, 1), 2 * level[0] / max(level[2] - 1, 1))
         seeds = []
         for j in np.argsort(score):
             if len(seeds) == beam:
@@ -113,15 +183,16 @@ def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, heig
                 points: np.ndarray | None = None, params: ScoreParams = ScoreParams()) -> Refined:
     """Refine one pose (6,) against the photo's skyline (W,): local search, then least squares."""
     f0 = intrinsics.f_px if f_px is None else float(f_px)
-    pose, renders = local_search(terrain, np.asarray(pose, np.float64), intrinsics, height, image_skyline, weights,
+    start = np.asarray(pose, np.float64)
+    pose, renders = local_search(terrain, start, intrinsics, height, image_skyline, weights,
                                  f0, points=points, params=params)
     q = np.r_[pose[0], pose[1], pose[3], pose[4], pose[5], f0]
-    stages = [q]
+    stages = [np.r_[start[0], start[1], start[3], start[4], start[5], f0], q]
     for free in ([2, 3, 4], [0, 1, 2, 3, 4] + ([5] if fit_focal else [])):
         q, n = _least_squares(terrain, q, free, intrinsics, height, image_skyline, weights, max_nfev, params)
         stages.append(q)
         renders += n
-    # keep the best stage: a least-squares run on a rough score surface can end worse than it began
+    # keep the best stage (the start included): a run on a rough score surface can end worse than it began
     poses, k = _pose_of(terrain.dem, np.array(stages), height, intrinsics)
     inside = np.isfinite(poses[:, 2])
     if not inside.any():
