@@ -30,7 +30,6 @@ class SkylineParams:
     rounds: int = 3  # boundary estimate -> re-fit colour models -> boundary
     band: int = 6  # pixels either side of the boundary left out of re-fitting
     texture_weight: float = 0.3  # textured pixels are unlikely sky
-    terrain_depth: float = 1.0  # terrain training pixels: at most this share of H below the boundary
 
 
 @dataclass(frozen=True)
@@ -159,7 +158,7 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
         unary = np.vstack([np.zeros((1, W)), np.cumsum(sky_cost - p, axis=0)])
         rows = boundary_dp(unary - params.edge_bonus * edges, params.jump_cost, params.jump_cap)
         sky_mask = v < rows[None, :] - params.band
-        terrain_mask = (v >= rows[None, :] + params.band) & (v < rows[None, :] + params.band + params.terrain_depth * H)
+        terrain_mask = v >= rows[None, :] + params.band
     sub, contrast = _subpixel(features, rows)
     skyline = np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub))
     # confidence: probability margin either side of the boundary and colour contrast
