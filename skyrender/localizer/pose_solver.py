@@ -229,14 +229,13 @@ def angles_from_rotations(R: np.ndarray) -> np.ndarray:
     return np.column_stack([np.degrees(pan) % 360.0, np.degrees(tilt), np.degrees(swing)])
 
 
-def poses_at(dem: DEM, xy: np.ndarray, world: np.ndarray, bearings: np.ndarray, height: float,
+def poses_at(centres: np.ndarray, world: np.ndarray, bearings: np.ndarray,
              c: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Poses (N, 6) standing at positions xy (N, 2), z = g + height, turned so that the
-    camera bearings (N, 3, 3) point at the world points (N, 3, 3).
+    """Poses (N, 6) standing at camera centres (N, 3), turned so that the camera
+    bearings (N, 3, 3) point at the world points (N, 3, 3); c: curvature coefficient.
 
     Also returns the rotations (N, 3, 3) and the world directions (N, 3, 3) they used.
     """
-    centres = _camera_centres(dem, xy, height)
     dirs = _world_directions(world, centres, c)
     R = rotations_from_bearings(bearings, dirs)
     return np.column_stack([centres, angles_from_rotations(R)]), R, dirs
@@ -282,12 +281,13 @@ def solve_poses(dem: DEM, image_uv: np.ndarray, world: np.ndarray, height: float
         xy = np.where(np.isfinite(flat).all(axis=1, keepdims=True),
                       resection_2d(world[:, :, :2], flat[:, 0], flat[:, 1]), xy)
     xy = refine_positions(dem, xy, world, measured, height, c)
+    centres = _camera_centres(dem, xy, height)
     ok = np.zeros(N, dtype=bool)
-    ok[keep] = np.all(np.isfinite(xy), axis=1) & np.isfinite(dem.ground(xy[:, 0], xy[:, 1]))
+    ok[keep] = np.all(np.isfinite(centres), axis=1)
     if not ok.any():
         return poses, residual
     bearings, f, image_uv, world = bearings[ok[keep]], f[ok[keep]], image_uv[ok[keep]], world[ok[keep]]
-    poses[ok], R, dirs = poses_at(dem, xy[ok[keep]], world, bearings, height, c)
+    poses[ok], R, dirs = poses_at(centres[ok[keep]], world, bearings, c)
     # reprojection: camera-frame coordinates of the world directions
     cam = (R[:, None, :, :] * dirs[:, :, :, None]).sum(axis=2)  # R^T w: (n, 3 points, right/up/forward)
     with np.errstate(divide="ignore", invalid="ignore"):

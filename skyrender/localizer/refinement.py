@@ -91,28 +91,32 @@ def resection_sweep(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, 
     n = np.maximum(3, np.ceil(2 * half / spacing).astype(int) + 1)
     gw, gs = np.meshgrid(np.linspace(-half[0], half[0], n[0]), np.linspace(-half[1], half[1], n[1]))
     xy = pose[:2] + gw.reshape(-1, 1) * axes[:, 0] + gs.reshape(-1, 1) * axes[:, 1]
-    xy = xy[np.isfinite(dem.ground(xy[:, 0], xy[:, 1]))]
-    if len(xy) == 0:
-        return [pose], spacing, 0
     centres = np.column_stack([xy, dem.ground(xy[:, 0], xy[:, 1]) + height])
-    sees = line_of_sight(terrain, np.repeat(centres, len(points), axis=0), np.tile(points, (len(xy), 1)))
-    xy = xy[sees.reshape(len(xy), len(points)).all(axis=1)]
-    if len(xy) == 0:
+    centres = centres[np.isfinite(centres[:, 2])]
+    if len(centres) == 0:
         return [pose], spacing, 0
-    n_pos = len(xy)
-    poses, _, _ = poses_at(dem, xy, np.broadcast_to(points, (n_pos, 3, 3)), np.broadcast_to(bearings, (n_pos, 3, 3)),
-                           height, c)
+    sees = line_of_sight(terrain, np.repeat(centres, len(points), axis=0), np.tile(points, (len(centres), 1)))
+    centres = centres[sees.reshape(len(centres), len(points)).all(axis=1)]
+    if len(centres) == 0:
+        return [pose], spacing, 0
+    n_pos = len(centres)
+    poses, _, _ = poses_at(centres, np.broadcast_to(points, (n_pos, 3, 3)), np.broadcast_to(bearings, (n_pos, 3, 3)), c)
     small, cols = strided_intrinsics(k_full, SWEEP_STRIDE)
     rendered = render_skylines(terrain, poses, small, tol=0.25 / SWEEP_STRIDE)
     rendered = intrinsics.cy + SWEEP_STRIDE * (rendered - small.cy)
     score, _ = score_skylines(rendered, image_skyline[cols], weights[cols], params)
+    return best_apart(poses, score, beam, spacing), spacing, n_pos
+
+
+def best_apart(poses: np.ndarray, score: np.ndarray, beam: int, spacing: float) -> list[np.ndarray]:
+    """The ``beam`` lowest-scoring poses whose positions lie at least ``spacing`` (m) apart."""
     seeds: list[np.ndarray] = []
     for j in np.argsort(score):
         if len(seeds) == beam:
             break
         if all(np.hypot(*(poses[j, :2] - s_[:2])) >= spacing for s_ in seeds):
             seeds.append(poses[j].copy())
-    return seeds, spacing, n_pos
+    return seeds
 
 
 def _box_offsets(pose: np.ndarray, along_m: float, across_m: float, n_along: int, n_across: int) -> np.ndarray:
@@ -168,12 +172,7 @@ def local_search(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, hei
         poses[:, 4] = poses[:, 4] + np.degrees(np.arctan(b / f_px))
         poses[:, 5] = poses[:, 5] - np.degrees(np.arctan(c))
         spacing = min(2 * level[1] / max(level[3] - 1, 1), 2 * level[0] / max(level[2] - 1, 1))
-        seeds = []
-        for j in np.argsort(score):
-            if len(seeds) == beam:
-                break
-            if all(np.hypot(*(poses[j, :2] - s_[:2])) >= spacing for s_ in seeds):
-                seeds.append(poses[j].copy())
+        seeds = best_apart(poses, score, beam, spacing)
     return seeds[0], renders
 
 
