@@ -57,7 +57,7 @@ SEARCH_MAX_POSES = 200
 #: SWEEP_SIGMAS, half-widths clipped to SWEEP_HALF_WIDTH_M, SWEEP_SPACING_M apart (coarser
 #: when the ellipse would need more than SWEEP_MAX_POSES), each turned to its three
 #: points and rendered on every SWEEP_STRIDE-th column without alignment.
-APEX_NOISE_PX = 1.0
+APEX_NOISE_PX = 2.0
 SWEEP_SIGMAS = 2.5
 SWEEP_HALF_WIDTH_M = (30.0, 1200.0)
 SWEEP_SPACING_M = 10.0
