@@ -99,6 +99,17 @@ def test_hypotheses_are_complete_and_most_probable_first(scene):
     T = model.covisibility.together
     assert np.all(T[mtri[:, 0], mtri[:, 1]] > 0) and np.all(T[mtri[:, 1], mtri[:, 2]] > 0)
     assert len(np.unique(np.sort(mtri, axis=1), axis=0)) == len(mtri)  # each set of three once
+    ctri, _ = model_triples(model, "covisible", k=12)
+    assert len(ctri) > 0 and np.all(T[ctri[:, 1], ctri[:, 2]] > 0)
+    # the anchor of each kept triple is one whose 12 most co-visible (ties aside) hold both others
+    anchored = np.zeros(len(ctri), bool)
+    for a, j, k in ((0, 1, 2), (1, 0, 2), (2, 0, 1)):
+        cnt = T[ctri[:, a]]
+        thr = np.sort(cnt, axis=1)[:, -13]  # the 12th largest count besides the anchor's own (the diagonal)
+        anchored |= (T[ctri[:, a], ctri[:, j]] >= thr) & (T[ctri[:, a], ctri[:, k]] >= thr)
+    assert anchored.all()
+    with pytest.raises(ValueError):
+        model_triples(model, "farthest")
     hyps = generate_hypotheses(u, size, model)
     assert len(hyps) == len(itri) * len(mtri) * len(PERMUTATIONS)
     assert np.all(np.diff(hyps.log_p) <= 1e-12)

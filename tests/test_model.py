@@ -14,6 +14,7 @@ from skyrender.dem import DEM, fractal_terrain
 from skyrender.errors import InputError
 from skyrender.model import (CovisibilityParams, ModelParams, PeakParams, build_model, find_peaks,
                              k_nearest_features, load_model, save_model)
+from skyrender.model.neighbours import most_covisible_features
 from skyrender.model.covisibility import skyline_features
 from skyrender.render import Terrain
 
@@ -90,6 +91,18 @@ def test_neighbour_sets_match_brute_force():
         brute = np.argsort(d, kind="stable")[:15]
         np.testing.assert_allclose(np.sort(d[nb[i]]), np.sort(d[brute]))
         assert p not in nb[i]
+
+
+def test_most_covisible_features_rank_by_count_then_distance():
+    together = np.array([[9, 3, 5, 0, 5],
+                         [3, 9, 0, 0, 1],
+                         [5, 0, 9, 2, 5],
+                         [0, 0, 2, 9, 0],
+                         [5, 1, 5, 0, 9]])
+    xy = np.array([[0.0, 0.0], [100.0, 0.0], [300.0, 0.0], [50.0, 0.0], [200.0, 0.0]])
+    nb = most_covisible_features(together, xy, k=3)
+    # row 0: counts 5 (points 2 and 4, the nearer 4 first), then 3; never-together 3 left out
+    np.testing.assert_array_equal(nb, [[4, 2, 1], [0, 4, -1], [4, 0, 3], [2, -1, -1], [2, 0, 1]])
 
 
 def brute_skyline_feature(dem: DEM, cam, feat, tol_deg: float, min_range: float, max_range: float):

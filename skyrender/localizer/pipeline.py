@@ -36,6 +36,9 @@ class LocalizeParams:
     residual_px: float = 2.0  # reprojection cut-off of the three-point fit
     limit_tol_px: float = 5.0  # "skyline is the limit" tolerance (plus f * 150 m / distance)
     chunk: int = 50_000  # hypotheses solved per batch
+    max_hypotheses: int = 1_200_000  # then abstain (on 50 rendered views the first right one came by 1.1 M but once)
+    neighbours: str = "nearest"  # model triples: an anchor's k nearest (the paper's) or "covisible" features
+    neighbours_k: int | None = None  # ... this many of them (None: the model's k)
     verify_stride: int = 4  # every n-th column in the verification renders
     refine_per_chunk: int = 1  # best new candidates refined after each chunk
     final_refinements: int = 3  # distinct candidates refined at the end
@@ -193,7 +196,9 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     tick = time.perf_counter()
     peak_uv = np.array([[p.u, p.v] for p in peaks])
     in_view = model.features_for_prior(**prior) if prior else None
-    hyps = generate_hypotheses(peak_uv[:, 0], np.array([p.size for p in peaks]), model, in_view, params.ordered)
+    hyps = generate_hypotheses(peak_uv[:, 0], np.array([p.size for p in peaks]), model, in_view, params.ordered,
+                               neighbours=params.neighbours, k=params.neighbours_k)
+    hyps = hyps.take(slice(0, params.max_hypotheses))
     in_sky = segments_in_sky(peak_uv, sky)
     stats.generated = len(hyps) * len(fovs)
     features = model.features.xyz
