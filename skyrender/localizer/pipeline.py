@@ -1,9 +1,13 @@
 """Stages 3–4 put together: photo skyline -> hypotheses -> poses -> constraints ->
 verification -> refinement -> a pose with a confidence, or an abstention.
 
-Hypotheses are taken most probable first in chunks; after each chunk the best
-verified candidate is refined, and the search stops as soon as a refined pose
-agrees with the photo's skyline on ``accept_agreement`` of its columns.
+Hypotheses are taken most probable first in chunks (at most ``max_hypotheses``);
+after each chunk the best verified candidate is refined. Once a refined pose
+scores ``accept_score_px`` and agrees with the photo's skyline on
+``accept_agreement`` of its columns, ``confirm_chunks`` more chunks are tried
+(a pose tens to hundreds of metres off can fit a far foreground almost as well)
+and the best refined pose wins; its confidence falls when a distinct refined
+pose fits nearly as well.
 """
 
 from __future__ import annotations
