@@ -22,6 +22,23 @@ from ..render.visibility import line_of_sight
 CHUNK_PROJECTIONS = 4_000_000
 
 
+def _against_skyline(poses: np.ndarray, points: np.ndarray, skyline: np.ndarray, intrinsics: Intrinsics,
+                     curvature: bool):
+    """Project ``points`` (F, 3) under ``poses`` (N, 6) in chunks; yields (slice of poses,
+    v (n, F), inside (n, F): in front and within the image's columns, the photo skyline's
+    v at each point's column (n, F), H where the column sees only sky)."""
+    W, H = intrinsics.width, intrinsics.height
+    sky = np.where(np.isfinite(skyline), skyline, H)
+    chunk = max(1, CHUNK_PROJECTIONS // max(len(points), 1))
+    for s in range(0, len(poses), chunk):
+        sl = slice(s, s + chunk)
+        uv, front = project(points, poses[sl], intrinsics, curvature)
+        u, v = uv[..., 0], uv[..., 1]
+        inside = front & (u >= 0) & (u < W)
+        col = np.clip(np.where(inside, u, 0), 0, W - 1).astype(np.int64)
+        yield sl, v, inside, sky[col]
+
+
 def skyline_limit(poses: np.ndarray, points: np.ndarray, skyline: np.ndarray, intrinsics: Intrinsics,
                   tol_px: float = 5.0, position_slack_m: float = 150.0, curvature: bool = True) -> np.ndarray:
     """(N,) bool: True where no point projects above the image skyline by more than a tolerance.
@@ -32,20 +49,12 @@ def skyline_limit(poses: np.ndarray, points: np.ndarray, skyline: np.ndarray, in
     moves a point at its distance d: f * slack / d px. A hypothesis' pose is only as
     good as its three matched summits, and a near point moves a lot.
     """
-    W, H = intrinsics.width, intrinsics.height
-    sky = np.where(np.isfinite(skyline), skyline, H)  # v must not be smaller than this, less the tolerance
     ok = np.ones(len(poses), dtype=bool)
-    chunk = max(1, CHUNK_PROJECTIONS // max(len(points), 1))
-    for s in range(0, len(poses), chunk):
-        batch = poses[s : s + chunk]
-        uv, front = project(points, batch, intrinsics, curvature)
-        u, v = uv[..., 0], uv[..., 1]
-        inside = front & (u >= 0) & (u < W)
-        col = np.clip(np.where(inside, u, 0), 0, W - 1).astype(np.int64)
+    for sl, v, inside, sky_v in _against_skyline(poses, points, skyline, intrinsics, curvature):
+        batch = poses[sl]
         distance = np.hypot(points[None, :, 0] - batch[:, None, 0], points[None, :, 1] - batch[:, None, 1])
         tol = tol_px + intrinsics.f_px * position_slack_m / np.maximum(distance, 1.0)
-        above = inside & (v < sky[col] - tol)
-        ok[s : s + chunk] = ~above.any(axis=1)
+        ok[sl] = ~(inside & (v < sky_v - tol)).any(axis=1)
     return ok
 
 
@@ -54,17 +63,10 @@ def prior_in_view(poses: np.ndarray, points: np.ndarray, skyline: np.ndarray, in
     """(N,) bool: the pose shows at least one of ``points`` (F', 3) — the peaks a prior
     says are in view — inside the image and not above the photo's skyline."""
     ok = np.zeros(len(poses), dtype=bool)
-    if len(points) == 0 or len(poses) == 0:
+    if len(points) == 0:
         return ok
-    W, H = intrinsics.width, intrinsics.height
-    sky = np.where(np.isfinite(skyline), skyline, H)
-    chunk = max(1, CHUNK_PROJECTIONS // len(points))
-    for s in range(0, len(poses), chunk):
-        uv, front = project(points, poses[s : s + chunk], intrinsics, curvature)
-        u, v = uv[..., 0], uv[..., 1]
-        inside = front & (u >= 0) & (u < W) & (v < H)
-        col = np.clip(np.where(inside, u, 0), 0, W - 1).astype(np.int64)
-        ok[s : s + chunk] = (inside & (v >= sky[col] - tol_px)).any(axis=1)
+    for sl, v, inside, sky_v in _against_skyline(poses, points, skyline, intrinsics, curvature):
+        ok[sl] = (inside & (v < intrinsics.height) & (v >= sky_v - tol_px)).any(axis=1)
     return ok
 
 

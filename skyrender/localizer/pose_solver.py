@@ -123,7 +123,9 @@ def plausible_positions(dem: DEM, xy: np.ndarray, world: np.ndarray, measured: n
     return ok
 
 
-def _camera_centres(dem: DEM, xy: np.ndarray, height: float) -> np.ndarray:
+def camera_centres(dem: DEM, xy: np.ndarray, height: float) -> np.ndarray:
+    """(..., 3) camera centres at positions xy (..., 2) (m), ``height`` m above the ground
+    (z NaN outside the DEM)."""
     return np.concatenate([xy, (dem.ground(xy[..., 0], xy[..., 1]) + height)[..., None]], axis=-1)
 
 
@@ -138,6 +140,17 @@ def _world_directions(points: np.ndarray, centres: np.ndarray, c: float) -> np.n
     return np.stack([rx * inv, ry * inv, rz * inv], axis=-1)
 
 
+def _angles_and_jacobian(dem: DEM, xy: np.ndarray, world: np.ndarray, height: float,
+                         c: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The three inter-point angles (N, 3) (rad) seen from positions xy (N, 2), z = g + height,
+    and their forward-difference derivatives along x and along y (rad/m), each (N, 3)."""
+    def angles(p):
+        return _pair_angles(_world_directions(world, camera_centres(dem, p, height), c))
+
+    a0 = angles(xy)
+    return a0, (angles(xy + (FD_STEP_M, 0.0)) - a0) / FD_STEP_M, (angles(xy + (0.0, FD_STEP_M)) - a0) / FD_STEP_M
+
+
 def refine_positions(dem: DEM, xy: np.ndarray, world: np.ndarray, measured: np.ndarray, height: float,
                      c: float, iterations: int = GN_ITERATIONS) -> np.ndarray:
     """Gauss–Newton on (x, y): match the three inter-bearing angles, z = g + height.
@@ -145,14 +158,9 @@ def refine_positions(dem: DEM, xy: np.ndarray, world: np.ndarray, measured: np.n
     xy : (N, 2) start; world : (N, 3, 3) points; measured : (N, 3) angles (rad).
     Forward-difference Jacobian; the 2 x 2 normal equations are solved in closed form.
     """
-    def angles(p):
-        return _pair_angles(_world_directions(world, _camera_centres(dem, p, height), c))
-
     xy = xy.copy()
     for _ in range(iterations):
-        a0 = angles(xy)
-        jx = (angles(xy + (FD_STEP_M, 0.0)) - a0) / FD_STEP_M  # (N, 3)
-        jy = (angles(xy + (0.0, FD_STEP_M)) - a0) / FD_STEP_M
+        a0, jx, jy = _angles_and_jacobian(dem, xy, world, height, c)
         r = a0 - measured
         a, b, d = (jx * jx).sum(1), (jx * jy).sum(1), (jy * jy).sum(1)
         gx, gy = (jx * r).sum(1), (jy * r).sum(1)
@@ -178,12 +186,8 @@ def position_uncertainty(dem: DEM, xy: np.ndarray, world: np.ndarray, height: fl
     rarely the viewing direction. Returns (axes (2, 2), columns weak then strong;
     sigma (2,) in metres, weak first).
     """
-    def angles(p):
-        return _pair_angles(_world_directions(world[None], _camera_centres(dem, p[None], height), c))[0]
-
-    a0 = angles(xy)
-    J = np.column_stack([(angles(xy + (FD_STEP_M, 0.0)) - a0) / FD_STEP_M,
-                         (angles(xy + (0.0, FD_STEP_M)) - a0) / FD_STEP_M])
+    _, jx, jy = _angles_and_jacobian(dem, np.asarray(xy, np.float64)[None], world[None], height, c)
+    J = np.column_stack([jx[0], jy[0]])
     eig, axes = np.linalg.eigh(J.T @ J)  # ascending: weak axis first
     with np.errstate(divide="ignore"):
         sigma = angle_noise_rad / np.sqrt(np.maximum(eig, 0.0))
@@ -276,12 +280,12 @@ def solve_poses(dem: DEM, image_uv: np.ndarray, world: np.ndarray, height: float
     xy, world, measured, bearings, f = xy[keep], world[keep], measured[keep], bearings[keep], f[keep]
     image_uv = np.asarray(image_uv, dtype=np.float64)[keep]
     for _ in range(RESECTION_ROUNDS):
-        dirs = _world_directions(world, _camera_centres(dem, xy, height), c)
+        dirs = _world_directions(world, camera_centres(dem, xy, height), c)
         flat = horizontal_angles(measured, np.arcsin(np.clip(dirs[..., 2], -1.0, 1.0)))
         xy = np.where(np.isfinite(flat).all(axis=1, keepdims=True),
                       resection_2d(world[:, :, :2], flat[:, 0], flat[:, 1]), xy)
     xy = refine_positions(dem, xy, world, measured, height, c)
-    centres = _camera_centres(dem, xy, height)
+    centres = camera_centres(dem, xy, height)
     ok = np.zeros(N, dtype=bool)
     ok[keep] = np.all(np.isfinite(centres), axis=1)
     if not ok.any():

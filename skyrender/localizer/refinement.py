@@ -15,7 +15,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -23,8 +23,8 @@ from scipy.optimize import least_squares
 from ..camera import Intrinsics, curvature_coeff, project
 from ..render import Terrain, render_skylines
 from ..render.visibility import line_of_sight
-from .pose_solver import image_bearings, position_uncertainty, poses_at
-from .verification import ScoreParams, align_skylines, column_errors, score_skylines, strided_intrinsics
+from .pose_solver import camera_centres, image_bearings, position_uncertainty, poses_at
+from .verification import ScoreParams, align_skylines, column_errors, score_skylines, strided_skylines
 
 #: Forward-difference steps: metres for x, y; degrees for the angles; relative for f.
 STEP_XY_M = 2.0
@@ -80,7 +80,7 @@ def resection_sweep(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, 
     dem = terrain.dem
     c = curvature_coeff(terrain.curvature)
     points = np.asarray(points, np.float64)
-    k_full = Intrinsics(intrinsics.width, intrinsics.height, f_px, intrinsics.cx, intrinsics.cy)
+    k_full = replace(intrinsics, f_px=f_px)
     uv, _ = project(points, pose[None], k_full, terrain.curvature)
     bearings = image_bearings(uv[0], f_px, intrinsics.cx, intrinsics.cy)
     axes, sigma = position_uncertainty(dem, np.asarray(pose[:2], np.float64), points, height, c, APEX_NOISE_PX / f_px)
@@ -91,19 +91,16 @@ def resection_sweep(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, 
     n = np.maximum(3, np.ceil(2 * half / spacing).astype(int) + 1)
     gw, gs = np.meshgrid(np.linspace(-half[0], half[0], n[0]), np.linspace(-half[1], half[1], n[1]))
     xy = pose[:2] + gw.reshape(-1, 1) * axes[:, 0] + gs.reshape(-1, 1) * axes[:, 1]
-    centres = np.column_stack([xy, dem.ground(xy[:, 0], xy[:, 1]) + height])
+    centres = camera_centres(dem, xy, height)
     centres = centres[np.isfinite(centres[:, 2])]
     if len(centres) == 0:
         return [pose], spacing, 0
-    sees = line_of_sight(terrain, np.repeat(centres, len(points), axis=0), np.tile(points, (len(centres), 1)))
-    centres = centres[sees.reshape(len(centres), len(points)).all(axis=1)]
+    centres = centres[_sees_all(terrain, centres, points)]
     if len(centres) == 0:
         return [pose], spacing, 0
     n_pos = len(centres)
     poses, _, _ = poses_at(centres, np.broadcast_to(points, (n_pos, 3, 3)), np.broadcast_to(bearings, (n_pos, 3, 3)), c)
-    small, cols = strided_intrinsics(k_full, SWEEP_STRIDE)
-    rendered = render_skylines(terrain, poses, small, tol=0.25 / SWEEP_STRIDE)
-    rendered = intrinsics.cy + SWEEP_STRIDE * (rendered - small.cy)
+    rendered, cols = strided_skylines(terrain, poses, k_full, SWEEP_STRIDE, tol_px=0.25)
     score, _ = score_skylines(rendered, image_skyline[cols], weights[cols], params)
     return best_apart(poses, score, beam, spacing), spacing, n_pos
 
@@ -117,6 +114,12 @@ def best_apart(poses: np.ndarray, score: np.ndarray, beam: int, spacing: float) 
         if all(np.hypot(*(poses[j, :2] - s_[:2])) >= spacing for s_ in seeds):
             seeds.append(poses[j].copy())
     return seeds
+
+
+def _sees_all(terrain: Terrain, centres: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(n,) bool: camera centres (n, 3) with a clear line of sight to every one of ``points`` (m, 3)."""
+    sees = line_of_sight(terrain, np.repeat(centres, len(points), axis=0), np.tile(points, (len(centres), 1)))
+    return sees.reshape(len(centres), len(points)).all(axis=1)
 
 
 def _box_offsets(pose: np.ndarray, along_m: float, across_m: float, n_along: int, n_across: int) -> np.ndarray:
@@ -139,8 +142,7 @@ def local_search(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, hei
     one of them is hidden are not rendered (a camera 2 m up sees its peaks from
     narrow strips of ground only). Returns the best pose and the number of renders used."""
     dem = terrain.dem
-    small, cols = strided_intrinsics(intrinsics, stride)
-    k = np.array([f_px / stride, small.cx, small.cy])
+    k_full = replace(intrinsics, f_px=f_px)
     pose = np.asarray(pose, np.float64)
     seeds, renders, levels = [pose.copy()], 0, SEARCH_LEVELS
     if points is not None and len(points) == 3:
@@ -151,19 +153,17 @@ def local_search(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, hei
         grids = []
         for seed in seeds:
             xy = seed[:2] + _box_offsets(seed, *level)
-            grid = np.column_stack([xy, dem.ground(xy[:, 0], xy[:, 1]) + height, np.tile(seed[3:], (len(xy), 1))])
+            grid = np.column_stack([camera_centres(dem, xy, height), np.tile(seed[3:], (len(xy), 1))])
             grid = grid[np.isfinite(grid[:, 2])]
             if points is not None and len(grid):
-                sees = line_of_sight(terrain, np.repeat(grid[:, :3], len(points), axis=0), np.tile(points, (len(grid), 1)))
-                grid = grid[sees.reshape(len(grid), len(points)).all(axis=1)]
+                grid = grid[_sees_all(terrain, grid[:, :3], points)]
             if len(grid) > SEARCH_MAX_POSES:
                 grid = grid[np.linspace(0, len(grid) - 1, SEARCH_MAX_POSES).astype(np.int64)]
             grids.append(grid)
         poses = np.concatenate(grids)
         if len(poses) == 0:
             break
-        rendered = render_skylines(terrain, poses, small, per_pose_intrinsics=k, tol=0.1 / stride)
-        rendered = intrinsics.cy + stride * (rendered - small.cy)
+        rendered, cols = strided_skylines(terrain, poses, k_full, stride, tol_px=0.1)
         renders += len(poses)
         score, _, a, b, c = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols],
                                            params=params)
@@ -206,8 +206,7 @@ def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, heig
 
 def _pose_of(dem, qs: np.ndarray, height: float, intrinsics: Intrinsics) -> tuple[np.ndarray, np.ndarray]:
     """Poses (P, 6) and per-pose intrinsics (P, 3) of parameter rows (x, y, pan, tilt, swing, f)."""
-    z = dem.ground(qs[:, 0], qs[:, 1]) + height
-    poses = np.column_stack([qs[:, 0], qs[:, 1], z, qs[:, 2], qs[:, 3], qs[:, 4]])
+    poses = np.column_stack([camera_centres(dem, qs[:, :2], height), qs[:, 2:5]])
     return poses, np.column_stack([qs[:, 5], np.full(len(qs), intrinsics.cx), np.full(len(qs), intrinsics.cy)])
 
 

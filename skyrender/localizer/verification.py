@@ -101,6 +101,16 @@ def strided_intrinsics(intrinsics: Intrinsics, stride: int) -> tuple[Intrinsics,
     return small, cols
 
 
+def strided_skylines(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, stride: int,
+                     tol_px: float) -> tuple[np.ndarray, np.ndarray]:
+    """Skylines (P, n) of poses (P, 6) on every ``stride``-th column
+    (:func:`strided_intrinsics`), in full-image v (px) to within ``tol_px`` full-image
+    px, and those columns (n,): a render ``stride`` times cheaper."""
+    small, cols = strided_intrinsics(intrinsics, stride)
+    rendered = render_skylines(terrain, poses, small, tol=tol_px / stride)
+    return intrinsics.cy + stride * (rendered - small.cy), cols
+
+
 def verify_poses(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, image_skyline: np.ndarray,
                  weights: np.ndarray, stride: int = 4,
                  params: ScoreParams = ScoreParams()) -> tuple[np.ndarray, np.ndarray]:
@@ -112,10 +122,7 @@ def verify_poses(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, im
     """
     if len(poses) == 0:
         return np.zeros(0), np.zeros(0)
-    small, cols = strided_intrinsics(intrinsics, stride)
-    # bisect to half a full-size pixel
-    rendered = render_skylines(terrain, poses, small, subpixel=True, tol=0.5 / stride)
-    rendered = intrinsics.cy + stride * (rendered - small.cy)
+    rendered, cols = strided_skylines(terrain, poses, intrinsics, stride, tol_px=0.5)
     score, agreement, *_ = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols],
                                           params=params)
     return score, agreement
