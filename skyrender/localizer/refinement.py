@@ -24,7 +24,7 @@ from ..camera import Intrinsics, curvature_coeff, project
 from ..render import Terrain, render_skylines
 from ..render.visibility import line_of_sight
 from .pose_solver import camera_centres, image_bearings, position_uncertainty, poses_at
-from .verification import ScoreParams, align_skylines, column_errors, score_skylines, strided_skylines
+from .verification import SHIFTS_PX, ScoreParams, align_skylines, column_errors, score_skylines, strided_skylines
 
 #: Forward-difference steps: metres for x, y; degrees for the angles; relative for f.
 STEP_XY_M = 2.0
@@ -50,6 +50,9 @@ class Refined:
 SEARCH_LEVELS = ((640.0, 160.0, 65, 9), (40.0, 40.0, 5, 5), (12.0, 12.0, 5, 5), (3.0, 3.0, 5, 5), (1.0, 1.0, 5, 5),
                  (0.3, 0.3, 5, 5))  # the last two: a camera at a crest's edge sees its foreground change per metre
 SEARCH_BEAM = 3
+#: Horizontal shifts (px) tried by the alignment after the first level: that level's
+#: alignment has corrected the orientation, what remains is a pixel or two.
+FINE_SHIFTS_PX = np.arange(-4.0, 4.01, 1.0)
 #: At most this many positions per seed and level are rendered (evenly thinned).
 SEARCH_MAX_POSES = 200
 #: Resection sweep (with matched points): positions over the three-point position's
@@ -149,7 +152,7 @@ def local_search(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, hei
         seeds, spacing, renders = resection_sweep(terrain, pose, intrinsics, height, image_skyline, weights, f_px,
                                                   points, beam, params)
         levels = [lv for lv in SEARCH_LEVELS if lv[0] <= 2 * spacing]
-    for level in levels:
+    for n_level, level in enumerate(levels):
         grids = []
         for seed in seeds:
             xy = seed[:2] + _box_offsets(seed, *level)
@@ -166,7 +169,7 @@ def local_search(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, hei
         rendered, cols = strided_skylines(terrain, poses, k_full, stride, tol_px=0.1)
         renders += len(poses)
         score, _, a, b, c = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols],
-                                           params=params)
+                                           shifts=SHIFTS_PX if n_level == 0 else FINE_SHIFTS_PX, params=params)
         # the skyline moved right by a px = pan left by a / f; down by b = tilt up; slope c = swing -c
         poses[:, 3] = (poses[:, 3] - np.degrees(np.arctan(a / f_px))) % 360.0
         poses[:, 4] = poses[:, 4] + np.degrees(np.arctan(b / f_px))
