@@ -113,8 +113,8 @@ class LocalizationResult:
 class _Candidate:
     pose: np.ndarray
     f_px: float
-    score: float
-    agreement: float
+    score: float  # verification scores (px): plain, and counting far skyline only
+    trusted: float
     points: np.ndarray  # (3, 3) the hypothesis' matched feature points
     refined: Refined | None = None
 
@@ -242,20 +242,21 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
                 continue
             tick = time.perf_counter()
             unique = _dedupe(poses[idx])
-            score, agreement = verify_poses(terrain, poses[idx[unique]], k_i, sky, weights, params.verify_stride,
-                                            params=params.score)
+            score, trusted = verify_poses(terrain, poses[idx[unique]], k_i, sky, weights, params.verify_stride,
+                                          params=params.score)
             stats.verified += len(unique)
             stats.add_time("verification", time.perf_counter() - tick)
-            for j in np.argsort(score)[: 4 * params.final_refinements]:
+            best = np.unique(np.r_[np.argsort(score)[: 4 * params.final_refinements],
+                                   np.argsort(trusted)[: 4 * params.final_refinements]])
+            for j in best[np.argsort(score[best])]:
                 h = idx[unique[j]]
                 if _distinct([c.pose for c in candidates], poses[h], params.same_pose_m):
-                    candidates.append(_Candidate(poses[h], f_px, float(score[j]), float(agreement[j]),
+                    candidates.append(_Candidate(poses[h], f_px, float(score[j]), float(trusted[j]),
                                                  features[chunk.features[h]]))
-        candidates.sort(key=lambda c: c.score)
-        del candidates[8 * params.final_refinements:]
+        candidates = _best_by_either(candidates, 8 * params.final_refinements)
         tick = time.perf_counter()
         budget = max(0, min(params.refine_per_chunk, params.max_refinements - stats.refined))
-        for cand in [c for c in candidates if c.refined is None][:budget]:
+        for cand in _next_to_refine(candidates, budget):
             _refine(cand, terrain, intrinsics, height, sky, weights, fov is None, params, stats)
         stats.add_time("refinement", time.perf_counter() - tick)
         done = [c for c in candidates if c.refined is not None]
@@ -267,7 +268,7 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
 
     tick = time.perf_counter()
     final = params.final_refinements if accepted is None else 0
-    for cand in [c for c in candidates if c.refined is None][:final]:
+    for cand in _next_to_refine(candidates, final):
         _refine(cand, terrain, intrinsics, height, sky, weights, fov is None, params, stats)
     stats.add_time("refinement", time.perf_counter() - tick)
     done = sorted([c for c in candidates if c.refined is not None], key=lambda c: c.refined.score)
@@ -287,6 +288,20 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
         lonlat = (float(lon), float(lat))
     return LocalizationResult("localized", r.pose, k_best.fov, confidence, time.perf_counter() - t_start,
                               stats.evaluated, stats, k_best, sky, rendered, model.dem.crs, lonlat)
+
+
+def _best_by_either(candidates: list[_Candidate], n: int) -> list[_Candidate]:
+    """The ``n`` best candidates by plain score and the ``n`` best by trusted score."""
+    keep = {id(c): c for key in ("score", "trusted") for c in sorted(candidates, key=lambda c: getattr(c, key))[:n]}
+    return sorted(keep.values(), key=lambda c: c.score)
+
+
+def _next_to_refine(candidates: list[_Candidate], n: int) -> list[_Candidate]:
+    """The ``n`` best unrefined candidates by plain score and the ``n`` best by trusted
+    score (up to 2n in all): each ranking finds right candidates the other misses."""
+    todo = [c for c in candidates if c.refined is None]
+    picked = {id(c): c for key in ("score", "trusted") for c in sorted(todo, key=lambda c: getattr(c, key))[:n]}
+    return list(picked.values())
 
 
 def _apply(idx: np.ndarray, ok: np.ndarray, stats: LocalizeStats, name: str) -> np.ndarray:

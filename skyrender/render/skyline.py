@@ -37,7 +37,7 @@ def skyline_iterations(height: int, subpixel: bool, tol: float) -> int:
 
 
 def render_skylines(terrain: Terrain, poses, intrinsics: Intrinsics, *, subpixel: bool = True,
-                    tol: float = 0.05, per_pose_intrinsics=None) -> np.ndarray:
+                    tol: float = 0.05, per_pose_intrinsics=None, with_distance: bool = False):
     """Skylines of many poses.
 
     Parameters
@@ -48,10 +48,13 @@ def render_skylines(terrain: Terrain, poses, intrinsics: Intrinsics, *, subpixel
     subpixel : continuous boundary (error <= tol px) or integer rows.
     tol : sub-pixel tolerance in px.
     per_pose_intrinsics : optional (P, 3) array of (f_px, cx, cy) overriding the default.
+    with_distance : also return how far away (m) each column's skyline terrain lies.
 
     Returns
     -------
-    (P, W) float64 skylines, v coordinates (px); (W,) for a single pose.
+    (P, W) float64 skylines, v coordinates (px); (W,) for a single pose. With
+    ``with_distance``, also the (P, W) [or (W,)] distances in metres along the ray
+    just below the boundary (inf where the column sees only sky).
     """
     pa = as_pose_array(poses)
     single = pa.ndim == 1
@@ -63,16 +66,25 @@ def render_skylines(terrain: Terrain, poses, intrinsics: Intrinsics, *, subpixel
     n_iter = skyline_iterations(H, subpixel, tol)
     per_launch = max(1, MAX_THREADS_PER_LAUNCH // W)
     out = np.empty((len(pa), W), dtype=np.float64)
+    distance = np.empty((len(pa), W), dtype=np.float64) if with_distance else None
     for start in range(0, len(pa), per_launch):
         sl = slice(start, start + per_launch)
         basis = np.concatenate([origins[sl], d0[sl], du[sl], dv[sl]], axis=1)
         kernel = _skyline_kernel if terrain.jit else _skyline_scalar
-        out[sl] = kernel(terrain, basis, W, H, subpixel, n_iter)
+        result = kernel(terrain, basis, W, H, subpixel, n_iter, with_distance)
+        if with_distance:
+            out[sl], distance[sl] = result
+        else:
+            out[sl] = result
+    if with_distance:
+        return (out[0], distance[0]) if single else (out, distance)
     return out[0] if single else out
 
 
-def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixel: bool, n_iter: int):
-    """Run :func:`_bisect_columns` for every (pose, column) and return (P, W) float64."""
+def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixel: bool, n_iter: int,
+                    with_distance: bool = False):
+    """Run :func:`_bisect_columns` for every (pose, column) and return (P, W) float64
+    skylines (and distances, with ``with_distance``)."""
     import drjit as dr
 
     mi = terrain.mi
@@ -81,15 +93,19 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
     if _frozen_bisect is None:  # recorded once per (W, H, mode, iterations), then replayed
         _frozen_bisect = dr.freeze(_bisect_columns)
     result = _frozen_bisect(terrain.scene, mi.Float(basis.astype(np.float32).ravel()),
-                            dr.arange(mi.UInt32, P * W), mi.Float(terrain.max_distance), W, H, subpixel, n_iter)
+                            dr.arange(mi.UInt32, P * W), mi.Float(terrain.max_distance), W, H, subpixel, n_iter,
+                            with_distance)
+    if with_distance:
+        return tuple(np.array(r, dtype=np.float64).reshape(P, W) for r in result)
     return np.array(result, dtype=np.float64).reshape(P, W)
 
 
 _frozen_bisect = None
 
 
-def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_iter: int):
-    """One Dr.Jit kernel: thread = (pose, column); a symbolic loop bisects v.
+def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_iter: int, with_distance: bool = False):
+    """One Dr.Jit kernel: thread = (pose, column); a symbolic loop bisects v; with
+    ``with_distance`` one more ray, on the terrain side of the boundary, measures its distance.
 
     ``buf`` holds 12 floats per pose (mesh-space origin and the ray basis d0, du, dv);
     ``idx`` enumerates pose * W + column. Frozen by ``dr.freeze``: the Python tracing of
@@ -110,8 +126,17 @@ def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_ite
     dv = mi.Vector3f(g(9), g(10), g(11))
     a = mi.Vector3f(g(3), g(4), g(5)) + (mi.Float(col) + 0.5) * du
 
+    def ray(v):
+        return mi.Ray3f(o, dr.normalize(a + v * dv), maxt, 0.0, [])
+
     def hits(v):
-        return scene.ray_test(mi.Ray3f(o, dr.normalize(a + v * dv), maxt, 0.0, []))
+        return scene.ray_test(ray(v))
+
+    def with_distance_of(v, v_terrain):
+        if not with_distance:
+            return v
+        t = scene.ray_intersect_preliminary(ray(v_terrain)).t
+        return v, dr.select(dr.isnan(v) | (t >= maxt), dr.inf, t)
 
     if subpixel:
         top, bottom = hits(mi.Float(0.0)), hits(mi.Float(float(H)))
@@ -123,7 +148,8 @@ def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_ite
             return dr.select(hit, lo, mid), dr.select(hit, mid, hi), i + 1
 
         lo, hi, _ = dr.while_loop((lo, hi, dr.zeros(mi.UInt32, n)), lambda lo, hi, i: i < n_iter, body)
-        return dr.select(top, 0.0, dr.select(bottom, 0.5 * (lo + hi), dr.nan))
+        v = dr.select(top, 0.0, dr.select(bottom, 0.5 * (lo + hi), dr.nan))
+        return with_distance_of(v, dr.select(top, 0.0, hi))
     lo, hi = dr.full(mi.Float, -1.0, n), dr.full(mi.Float, float(H), n)
 
     def body(lo, hi, i):
@@ -132,10 +158,11 @@ def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_ite
         return dr.select(hit, lo, mid), dr.select(hit, mid, hi), i + 1
 
     lo, hi, _ = dr.while_loop((lo, hi, dr.zeros(mi.UInt32, n)), lambda lo, hi, i: (i < n_iter) & (hi - lo > 1.0), body)
-    return dr.select(hi >= float(H), dr.nan, hi)
+    return with_distance_of(dr.select(hi >= float(H), dr.nan, hi), hi + 0.5)
 
 
-def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixel: bool, n_iter: int):
+def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixel: bool, n_iter: int,
+                    with_distance: bool = False):
     """The same bisection in numpy for the scalar fallback variant (slow)."""
     P = len(basis)
     o = np.repeat(basis[:, 0:3], W, axis=0)
@@ -146,6 +173,14 @@ def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
     def hits(v):
         return terrain.mesh_ray_test(o, a + np.asarray(v)[:, None] * dv)
 
+    def with_distance_of(v, v_terrain):
+        if not with_distance:
+            return v.reshape(P, W)
+        d = a + np.asarray(v_terrain)[:, None] * dv
+        t, _ = terrain._scalar_loop(o, d / np.linalg.norm(d, axis=1, keepdims=True), None, "ray_intersect")
+        t = np.where(np.isnan(v) | ~(t < terrain.max_distance), np.inf, t)
+        return v.reshape(P, W), t.reshape(P, W)
+
     n = P * W
     if subpixel:
         top, bottom = hits(np.zeros(n)), hits(np.full(n, float(H)))
@@ -154,7 +189,7 @@ def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
             mid = 0.5 * (lo + hi)
             hit = hits(mid)
             lo, hi = np.where(hit, lo, mid), np.where(hit, mid, hi)
-        result = np.where(top, 0.0, np.where(bottom, 0.5 * (lo + hi), np.nan))
+        return with_distance_of(np.where(top, 0.0, np.where(bottom, 0.5 * (lo + hi), np.nan)), np.where(top, 0.0, hi))
     else:
         lo, hi = np.full(n, -1.0), np.full(n, float(H))
         for _ in range(n_iter):
@@ -162,5 +197,4 @@ def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
             mid = np.floor(0.5 * (lo + hi))
             hit = hits(mid + 0.5)
             lo, hi = np.where(hit | ~active, lo, mid), np.where(hit & active, mid, hi)
-        result = np.where(hi >= H, np.nan, hi)
-    return result.reshape(P, W)
+        return with_distance_of(np.where(hi >= H, np.nan, hi), hi + 0.5)
