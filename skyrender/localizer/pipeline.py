@@ -47,6 +47,7 @@ class LocalizeParams:
     refine_per_chunk: int = 1  # best new candidates refined after each chunk
     final_refinements: int = 3  # distinct candidates refined at the end
     max_refinements: int = 16  # refinements in all (each ~0.3 s)
+    give_up_sweep_px: float = 1.5  # a refinement whose resection sweep fits no better than this stops there
     accept_score_px: float = 0.3  # stop early once a refined pose scores this well...
     accept_agreement: float = 0.95  # ...and agrees on this share of columns
     confirm_chunks: int = 2  # then go on this many chunks: a pose tens of metres off can score that well too
@@ -334,5 +335,6 @@ def _dedupe(poses: np.ndarray, cell_m: float = 50.0, cell_deg: float = 1.0) -> n
 
 def _refine(cand: _Candidate, terrain, intrinsics, height, sky, weights, fit_focal, params, stats) -> None:
     cand.refined = refine_pose(terrain, cand.pose, intrinsics, height, sky, weights, fit_focal=fit_focal,
-                               f_px=cand.f_px, points=cand.points, params=params.score)
+                               f_px=cand.f_px, points=cand.points, params=params.score,
+                               give_up_px=params.give_up_sweep_px)
     stats.refined += 1

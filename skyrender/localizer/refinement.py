@@ -70,7 +70,8 @@ SWEEP_STRIDE = 8
 
 def resection_sweep(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, height: float,
                     image_skyline: np.ndarray, weights: np.ndarray, f_px: float, points: np.ndarray,
-                    beam: int = SEARCH_BEAM, params: ScoreParams = ScoreParams()) -> tuple[list[np.ndarray], float, int]:
+                    beam: int = SEARCH_BEAM,
+                    params: ScoreParams = ScoreParams()) -> tuple[list[np.ndarray], float, float, int]:
     """The ``beam`` best positions (at least one grid step apart) over the uncertainty
     ellipse of a three-point pose, each turned to show its three points where ``pose``
     shows them.
@@ -79,7 +80,8 @@ def resection_sweep(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, 
     metres, so the skyline matches only in a small dip, while three distant points
     leave hundreds of metres of doubt, and not along the viewing direction: a dense
     grid over that doubt, cheap renders, orientation from the points. Returns
-    (seeds, grid spacing in m, renders used)."""
+    (seeds, the best score in px (NaN when nothing could be swept), grid spacing in m,
+    renders used)."""
     dem = terrain.dem
     c = curvature_coeff(terrain.curvature)
     points = np.asarray(points, np.float64)
@@ -88,7 +90,7 @@ def resection_sweep(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, 
     bearings = image_bearings(uv[0], f_px, intrinsics.cx, intrinsics.cy)
     axes, sigma = position_uncertainty(dem, np.asarray(pose[:2], np.float64), points, height, c, APEX_NOISE_PX / f_px)
     if not (np.all(np.isfinite(sigma)) and np.all(np.isfinite(bearings))):
-        return [pose], SWEEP_SPACING_M, 0
+        return [pose], np.nan, SWEEP_SPACING_M, 0
     half = np.clip(SWEEP_SIGMAS * sigma, *SWEEP_HALF_WIDTH_M)
     spacing = max(SWEEP_SPACING_M, float(np.sqrt(4 * half[0] * half[1] / SWEEP_MAX_POSES)))
     n = np.maximum(3, np.ceil(2 * half / spacing).astype(int) + 1)
@@ -97,15 +99,15 @@ def resection_sweep(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, 
     centres = camera_centres(dem, xy, height)
     centres = centres[np.isfinite(centres[:, 2])]
     if len(centres) == 0:
-        return [pose], spacing, 0
+        return [pose], np.nan, spacing, 0
     centres = centres[_sees_all(terrain, centres, points)]
     if len(centres) == 0:
-        return [pose], spacing, 0
+        return [pose], np.nan, spacing, 0
     n_pos = len(centres)
     poses, _, _ = poses_at(centres, np.broadcast_to(points, (n_pos, 3, 3)), np.broadcast_to(bearings, (n_pos, 3, 3)), c)
     rendered, cols = strided_skylines(terrain, poses, k_full, SWEEP_STRIDE, tol_px=0.25)
     score, _ = score_skylines(rendered, image_skyline[cols], weights[cols], params)
-    return best_apart(poses, score, beam, spacing), spacing, n_pos
+    return best_apart(poses, score, beam, spacing), float(score.min()), spacing, n_pos
 
 
 def best_apart(poses: np.ndarray, score: np.ndarray, beam: int, spacing: float) -> list[np.ndarray]:
@@ -133,25 +135,22 @@ def _box_offsets(pose: np.ndarray, along_m: float, across_m: float, n_along: int
     return np.column_stack([ga * np.sin(pan) + gc * np.cos(pan), ga * np.cos(pan) - gc * np.sin(pan)])
 
 
-def local_search(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, height: float,
+def local_search(terrain: Terrain, seeds: list[np.ndarray], intrinsics: Intrinsics, height: float,
                  image_skyline: np.ndarray, weights: np.ndarray, f_px: float, stride: int = 2,
-                 points: np.ndarray | None = None, beam: int = SEARCH_BEAM,
-                 params: ScoreParams = ScoreParams()) -> tuple[np.ndarray, int]:
-    """Coarse-to-fine grid search over (x, y), elongated along the line of sight, with
-    the orientation re-aligned per position (:func:`align_skylines`). The ``beam`` best
-    positions of each level (at least a grid step apart) seed the next: the score is
-    flat along the line of sight and one seed can fall into the wrong dip.
-    ``points`` (n, 3): the hypothesis' matched feature points; positions from which
-    one of them is hidden are not rendered (a camera 2 m up sees its peaks from
-    narrow strips of ground only). Returns the best pose and the number of renders used."""
+                 points: np.ndarray | None = None, beam: int = SEARCH_BEAM, params: ScoreParams = ScoreParams(),
+                 widest_m: float = np.inf) -> tuple[np.ndarray, int]:
+    """Coarse-to-fine grid search over (x, y) around ``seeds`` (poses (6,)), elongated
+    along the line of sight, with the orientation re-aligned per position
+    (:func:`align_skylines`); levels of ``SEARCH_LEVELS`` no wider than ``widest_m``.
+    The ``beam`` best positions of each level (at least a grid step apart) seed the
+    next: the score is flat along the line of sight and one seed can fall into the
+    wrong dip. ``points`` (n, 3): the hypothesis' matched feature points; positions
+    from which one of them is hidden are not rendered (a camera 2 m up sees its peaks
+    from narrow strips of ground only). Returns the best pose and the number of renders used."""
     dem = terrain.dem
     k_full = replace(intrinsics, f_px=f_px)
-    pose = np.asarray(pose, np.float64)
-    seeds, renders, levels = [pose.copy()], 0, SEARCH_LEVELS
-    if points is not None and len(points) == 3:
-        seeds, spacing, renders = resection_sweep(terrain, pose, intrinsics, height, image_skyline, weights, f_px,
-                                                  points, beam, params)
-        levels = [lv for lv in SEARCH_LEVELS if lv[0] <= 2 * spacing]
+    seeds, renders = [np.asarray(seed, np.float64).copy() for seed in seeds], 0
+    levels = [lv for lv in SEARCH_LEVELS if lv[0] <= widest_m]
     for n_level, level in enumerate(levels):
         grids = []
         for seed in seeds:
@@ -182,23 +181,45 @@ def local_search(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, hei
 def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, height: float,
                 image_skyline: np.ndarray, weights: np.ndarray, *, fit_focal: bool = False,
                 f_px: float | None = None, max_nfev: int = 30,
-                points: np.ndarray | None = None, params: ScoreParams = ScoreParams()) -> Refined:
-    """Refine one pose (6,) against the photo's skyline (W,): local search, then least squares."""
+                points: np.ndarray | None = None, params: ScoreParams = ScoreParams(),
+                give_up_px: float = np.inf) -> Refined:
+    """Refine one pose (6,) against the photo's skyline (W,): resection sweep (with
+    three matched ``points``), local search, then least squares. When the sweep's best
+    score exceeds ``give_up_px`` the candidate is wrong (on the benchmark views right
+    ones swept to <= 0.27 px, wrong ones >= 0.7 px) and its best swept pose is returned."""
     f0 = intrinsics.f_px if f_px is None else float(f_px)
     start = np.asarray(pose, np.float64)
-    pose, renders = local_search(terrain, start, intrinsics, height, image_skyline, weights,
-                                 f0, points=points, params=params)
+    seeds, renders, widest, swept = [start], 0, np.inf, np.nan
+    if points is not None and len(points) == 3:
+        seeds, swept, spacing, renders = resection_sweep(terrain, start, intrinsics, height, image_skyline, weights,
+                                                         f0, points, params=params)
+        widest = 2 * spacing
+    stages = [np.r_[start[0], start[1], start[3], start[4], start[5], f0]]
+    if swept > give_up_px:
+        stages.append(np.r_[seeds[0][[0, 1, 3, 4, 5]], f0])
+        return _best_stage(terrain, stages, height, intrinsics, image_skyline, weights, params, renders, seeds[0])
+    pose, n = local_search(terrain, seeds, intrinsics, height, image_skyline, weights, f0, points=points,
+                           params=params, widest_m=widest)
+    renders += n
     q = np.r_[pose[0], pose[1], pose[3], pose[4], pose[5], f0]
-    stages = [np.r_[start[0], start[1], start[3], start[4], start[5], f0], q]
+    stages.append(q)
     for free in ([2, 3, 4], [0, 1, 2, 3, 4] + ([5] if fit_focal else [])):
         q, n = _least_squares(terrain, q, free, intrinsics, height, image_skyline, weights, max_nfev, params)
         stages.append(q)
         renders += n
-    # keep the best stage (the start included): a run on a rough score surface can end worse than it began
+    return _best_stage(terrain, stages, height, intrinsics, image_skyline, weights, params, renders, pose)
+
+
+def _best_stage(terrain: Terrain, stages: list[np.ndarray], height: float, intrinsics: Intrinsics,
+                image_skyline: np.ndarray, weights: np.ndarray, params: ScoreParams, renders: int,
+                fallback: np.ndarray) -> Refined:
+    """The best of the refinement's stages (rows x, y, pan, tilt, swing, f), the start
+    included: a run on a rough score surface can end worse than it began."""
+    f0 = stages[0][5]
     poses, k = _pose_of(terrain.dem, np.array(stages), height, intrinsics)
     inside = np.isfinite(poses[:, 2])
     if not inside.any():
-        return Refined(pose, f0, np.inf, 0.0, renders)
+        return Refined(fallback, f0, np.inf, 0.0, renders)
     rendered = render_skylines(terrain, poses[inside], intrinsics, per_pose_intrinsics=k[inside])
     score, agreement = score_skylines(rendered, image_skyline, weights, params)
     j = int(np.argmin(score))
