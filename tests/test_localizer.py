@@ -13,8 +13,8 @@ from skyrender.localizer import LocalizeParams, localize
 from skyrender.localizer.constraints import segments_in_sky, skyline_limit
 from skyrender.localizer.hypotheses import PERMUTATIONS, generate_hypotheses, image_triples, model_triples
 from skyrender.localizer.pose_solver import resection_2d, rotations_from_bearings, solve_poses
-from skyrender.localizer.refinement import refine_pose
-from skyrender.localizer.verification import align_skylines, score_skylines
+from skyrender.localizer.refinement import refine_pose, resection_sweep
+from skyrender.localizer.verification import ScoreParams, align_skylines, score_skylines, trust_of_distance
 from skyrender.benchmarks.views import sample_views
 from skyrender.model import build_model
 from skyrender.render import Terrain, render_skylines
@@ -154,6 +154,32 @@ def test_scores_are_robust_and_alignment_recovers_a_shift():
     shifted = np.interp(cols + 0.5 + 6.0, cols + 0.5, image) + 3.0  # rendered = image moved 6 px left, 3 px down
     score, agreement, da, db, dc = align_skylines(shifted[None], image, cols, 320.0, w)
     assert da[0] == pytest.approx(6.0) and db[0] == pytest.approx(-3.0, abs=0.2) and agreement[0] > 0.95
+    # coarse-to-fine over the shifts finds what trying every shift finds
+    for shift in (-17.0, -4.0, 11.0, 25.0):
+        moved = np.interp(cols + 0.5 - shift, cols + 0.5, image) - 2.0
+        coarse = align_skylines(moved[None], image, cols, 320.0, w)
+        every = align_skylines(moved[None], image, cols, 320.0, w, coarse=1)
+        assert coarse[2][0] == every[2][0] == pytest.approx(-shift)
+        assert coarse[0][0] == pytest.approx(every[0][0], abs=1e-4)
+
+
+def test_trusted_score_counts_far_columns_and_charges_the_rest():
+    """trust 1 beyond trust_far_m, 0 nearer than trust_near_m; an untrusted column costs
+    untrusted_px whatever its error, so a pose whose skyline is all near has no evidence."""
+    p = ScoreParams()
+    trust = trust_of_distance(np.array([0.0, p.trust_near_m, 0.5 * (p.trust_near_m + p.trust_far_m), p.trust_far_m,
+                                        1e6, np.inf]))
+    np.testing.assert_allclose(trust, [0, 0, 0.5, 1, 1, 1])
+    image = np.full(100, 200.0)
+    rendered = np.stack([image, image - 8.0])  # a perfect fit, and terrain 8 px into the sky
+    far, near, half = np.ones((2, 100)), np.zeros((2, 100)), np.r_[np.ones(50), np.zeros(50)] * np.ones((2, 1))
+    s_far, _ = score_skylines(rendered, image, np.ones(100), p, far)
+    s_near, a_near = score_skylines(rendered, image, np.ones(100), p, near)
+    s_half, _ = score_skylines(rendered, image, np.ones(100), p, half)
+    np.testing.assert_allclose(s_far, [0.0, 8.0])
+    np.testing.assert_allclose(s_near, [p.untrusted_px] * 2)
+    np.testing.assert_allclose(a_near, [0.0, 0.0])
+    np.testing.assert_allclose(s_half, [0.5 * p.untrusted_px, 0.5 * (8.0 + p.untrusted_px)])
 
 
 def test_refinement_recovers_offset_poses(scene, views):
@@ -219,6 +245,38 @@ def test_resection_sweep_finds_the_camera_from_three_point_poses_hundreds_of_met
     assert len(errors) >= 20
     assert np.median(errors) < 30.0 and np.mean(errors < 60.0) >= 0.65
     assert len(accepted) >= 0.5 * len(errors) and max(accepted) < 60.0
+
+
+def test_refinement_gives_up_after_the_sweep_on_a_wrong_triple(scene, views):
+    """A three-point pose built on the wrong features: its sweep fits badly, so with
+    give_up_px the refinement stops there (a few hundred renders instead of thousands)
+    and still reports an honest (bad) score; a right triple is never given up."""
+    dem, terrain, model = scene
+    F = model.features.xyz
+    truth = views.poses[0]
+    sky = render_skylines(terrain, truth, K)
+    puv, front = project(F, truth, K)
+    column = np.clip(np.nan_to_num(puv[:, 0]), 0, 639).astype(int)
+    seen = np.flatnonzero(front & (puv[:, 0] > 20) & (puv[:, 0] < 620) & (np.abs(puv[:, 1] - sky[column]) < 1.0))
+    assert len(seen) >= 3
+    right = seen[np.argsort(puv[seen, 0])][[0, len(seen) // 2, -1]]
+    poses, residual = solve_poses(dem, puv[right][None], F[right][None], 2.0, K.f_px, K.cx, K.cy)
+    kept = refine_pose(terrain, poses[0], K, 2.0, sky, np.ones(640), f_px=K.f_px, points=F[right], give_up_px=1.5)
+    full = refine_pose(terrain, poses[0], K, 2.0, sky, np.ones(640), f_px=K.f_px, points=F[right])
+    assert kept.score == full.score and kept.score < 0.3
+    # the same image points matched to other features: the first wrong triple whose pose can be swept
+    for offset in range(1, len(F)):
+        wrong = (right + offset) % len(F)
+        poses, residual = solve_poses(dem, puv[right][None], F[wrong][None], 2.0, K.f_px, K.cx, K.cy)
+        if residual[0] <= 2.0 and np.hypot(*(poses[0, :2] - truth.array()[:2])) > 2000.0:
+            _, swept, _, _ = resection_sweep(terrain, poses[0], K, 2.0, sky, np.ones(640), K.f_px, F[wrong])
+            if np.isfinite(swept):
+                break
+    assert np.isfinite(swept) and swept > 1.5
+    quick = refine_pose(terrain, poses[0], K, 2.0, sky, np.ones(640), f_px=K.f_px, points=F[wrong], give_up_px=1.5)
+    slow = refine_pose(terrain, poses[0], K, 2.0, sky, np.ones(640), f_px=K.f_px, points=F[wrong])
+    assert quick.score > 1.0 and slow.score > 0.3
+    assert quick.evaluations < slow.evaluations
 
 
 # --- end to end on rendered photographs --------------------------------------------------
