@@ -2,7 +2,8 @@
 verification -> refinement -> a pose with a confidence, or an abstention.
 
 Hypotheses are taken most probable first in chunks (at most ``max_hypotheses``);
-after each chunk the best verified candidate is refined. Once a refined pose
+after each chunk the best verified candidate by each of the two verification
+scores (plain, and far skyline only) is refined. Once a refined pose
 scores ``accept_score_px`` and agrees with the photo's skyline on
 ``accept_agreement`` of its columns, ``confirm_chunks`` more chunks are tried
 (a pose tens to hundreds of metres off can fit a far foreground almost as well)
@@ -44,7 +45,7 @@ class LocalizeParams:
     neighbours: str = "nearest"  # model triples: an anchor's k nearest (the paper's) or "covisible" features
     neighbours_k: int | None = None  # ... this many of them (None: the model's k)
     verify_stride: int = 4  # every n-th column in the verification renders
-    refine_per_chunk: int = 1  # best new candidates refined after each chunk
+    refine_per_chunk: int = 1  # best new candidates (by each score) refined after each chunk
     final_refinements: int = 3  # distinct candidates refined at the end
     max_refinements: int = 16  # refinements in all (each ~0.3 s)
     give_up_sweep_px: float = 1.5  # a refinement whose resection sweep fits no better than this stops there
