@@ -293,17 +293,15 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
 
 
 def _best_by_either(candidates: list[_Candidate], n: int) -> list[_Candidate]:
-    """The ``n`` best candidates by plain score and the ``n`` best by trusted score."""
+    """The ``n`` best candidates by plain score and the ``n`` best by trusted score (up
+    to 2n, in plain-score order): each ranking finds right candidates the other misses."""
     keep = {id(c): c for key in ("score", "trusted") for c in sorted(candidates, key=lambda c: getattr(c, key))[:n]}
     return sorted(keep.values(), key=lambda c: c.score)
 
 
 def _next_to_refine(candidates: list[_Candidate], n: int) -> list[_Candidate]:
-    """The ``n`` best unrefined candidates by plain score and the ``n`` best by trusted
-    score (up to 2n in all): each ranking finds right candidates the other misses."""
-    todo = [c for c in candidates if c.refined is None]
-    picked = {id(c): c for key in ("score", "trusted") for c in sorted(todo, key=lambda c: getattr(c, key))[:n]}
-    return list(picked.values())
+    """:func:`_best_by_either` among the candidates not refined yet."""
+    return _best_by_either([c for c in candidates if c.refined is None], n)
 
 
 def _apply(idx: np.ndarray, ok: np.ndarray, stats: LocalizeStats, name: str) -> np.ndarray:
