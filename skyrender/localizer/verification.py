@@ -53,17 +53,21 @@ def column_errors(rendered: np.ndarray, image: np.ndarray, cap_px: float) -> np.
 
 
 def score_skylines(rendered: np.ndarray, image: np.ndarray, weights: np.ndarray,
-                   params: ScoreParams = ScoreParams(), trust=1.0) -> tuple[np.ndarray, np.ndarray]:
+                   params: ScoreParams = ScoreParams(),
+                   trust: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Robust score (px, lower is better) and agreement share of rendered skylines
     (P, W) against the photo's (W,), with per-column weights (W,) in [0, 1]; a
-    column's ``trust`` (scalar or (P, W) in [0, 1]) counts its cost, the rest of it
+    column's ``trust`` ((P, W) in [0, 1]; None: all 1) counts its cost, the rest of it
     costs ``params.untrusted_px``."""
     e = column_errors(rendered, image, params.cap_px)
     cost = np.where(e < 0, np.minimum(-e, params.cap_px), params.occluder_weight * np.minimum(e, params.cap_px))
-    cost = trust * cost + (1.0 - trust) * params.untrusted_px
+    agree = np.abs(e) <= params.agree_px
+    if trust is not None:
+        cost = trust * cost + (1.0 - trust) * params.untrusted_px
+        agree = agree * trust
     total = max(float(np.sum(weights)), 1e-9)
     score = (cost * weights).sum(axis=-1) / total
-    agreement = ((np.abs(e) <= params.agree_px) * trust * weights).sum(axis=-1) / total
+    agreement = (agree * weights).sum(axis=-1) / total
     return score, agreement
 
 
@@ -131,10 +135,11 @@ def _aligned_at(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx
 
     moved = at_shift(rendered)
     moved[np.broadcast_to((pos < 0) | (pos > n - 1), moved.shape)] = np.nan
-    trusted = np.float32(1.0) if trust is None else at_shift(trust)
+    trusted = None if trust is None else at_shift(trust)
     d = image[None, :].astype(np.float32) - moved
     finite = np.isfinite(d)
-    w = np.where(finite, weights[None, :].astype(np.float32) * trusted, np.float32(0.0))
+    w = weights[None, :].astype(np.float32) * (1.0 if trusted is None else trusted)
+    w = np.where(finite, w, np.float32(0.0))
     d0 = np.where(finite, d, np.float32(0.0))
     # robust line fit: least squares, then again without the columns beyond 3 px
     for _ in range(2):

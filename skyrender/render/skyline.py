@@ -90,7 +90,7 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
     mi = terrain.mi
     P = len(basis)
     global _frozen_bisect
-    if _frozen_bisect is None:  # recorded once per (W, H, mode, iterations), then replayed
+    if _frozen_bisect is None:  # recorded once per (W, H, mode, iterations, distances), then replayed
         _frozen_bisect = dr.freeze(_bisect_columns)
     result = _frozen_bisect(terrain.scene, mi.Float(basis.astype(np.float32).ravel()),
                             dr.arange(mi.UInt32, P * W), mi.Float(terrain.max_distance), W, H, subpixel, n_iter,
@@ -177,9 +177,8 @@ def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
         if not with_distance:
             return v.reshape(P, W)
         d = a + np.asarray(v_terrain)[:, None] * dv
-        t, _ = terrain._scalar_loop(o, d / np.linalg.norm(d, axis=1, keepdims=True), None, "ray_intersect")
-        t = np.where(np.isnan(v) | ~(t < terrain.max_distance), np.inf, t)
-        return v.reshape(P, W), t.reshape(P, W)
+        t, _ = terrain.mesh_intersect(o, d / np.linalg.norm(d, axis=1, keepdims=True))
+        return v.reshape(P, W), np.where(np.isnan(v), np.inf, t).reshape(P, W)
 
     n = P * W
     if subpixel:

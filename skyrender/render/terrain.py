@@ -136,16 +136,10 @@ class Terrain:
             return self._scalar_loop(o, d, maxt, "ray_test")
         return np.array(self.scene.ray_test(self._rays(o, d, maxt)), dtype=bool)
 
-    def intersect(self, origins, directions, viewer_xy=None):
-        """First hit of each ray with the terrain.
-
-        Returns (t, points, normals): t (N,) distance in units of the direction's length
-        (inf where the ray misses); points (N, 3) the hit in world coordinates (as the
-        terrain really is, not lowered); normals (N, 3) unit geometric normals (world).
-        """
-        if len(origins) == 0:  # Dr.Jit aborts the process on empty rays
-            return np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3))
-        o, (d,) = self.to_mesh_space(origins, (directions,), viewer_xy)
+    def mesh_intersect(self, o, d) -> tuple[np.ndarray, np.ndarray]:
+        """First hit of rays already in mesh space (see :meth:`to_mesh_space`): t (N,) in
+        units of the direction's length (inf where the ray misses) and the hit face's unit
+        upward normal (N, 3) (world; meaningless where t is inf)."""
         norm = np.linalg.norm(d, axis=-1)
         d = d / norm[:, None]
         if self.jit:
@@ -156,7 +150,20 @@ class Terrain:
         else:
             t, n = self._scalar_loop(o, d, None, "ray_intersect")
         hit = np.isfinite(t) & (t < self.max_distance)
-        t = np.where(hit, t, np.inf) / norm
+        return np.where(hit, t, np.inf) / norm, n
+
+    def intersect(self, origins, directions, viewer_xy=None):
+        """First hit of each ray with the terrain.
+
+        Returns (t, points, normals): t (N,) distance in units of the direction's length
+        (inf where the ray misses); points (N, 3) the hit in world coordinates (as the
+        terrain really is, not lowered); normals (N, 3) unit geometric normals (world).
+        """
+        if len(origins) == 0:  # Dr.Jit aborts the process on empty rays
+            return np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3))
+        o, (d,) = self.to_mesh_space(origins, (directions,), viewer_xy)
+        t, n = self.mesh_intersect(o, d)
+        hit = np.isfinite(t)
         dirs = np.asarray(directions, dtype=np.float64)
         with np.errstate(invalid="ignore"):
             seen = np.asarray(origins, dtype=np.float64) + t[:, None] * dirs
