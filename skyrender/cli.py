@@ -170,7 +170,7 @@ def model(
     """Build the model databases of a DEM (peaks, neighbour sets, co-visibility)."""
     from .backend import mitsuba
     from .dem import load_dem
-    from .model import CovisibilityParams, ModelParams, PeakParams, build_model, save_model
+    from .model import CovisibilityParams, HorizonParams, ModelParams, PeakParams, build_model, save_model
 
     for name, value in (("--major-radius", major_radius), ("--minor-radius", minor_radius), ("--spacing", spacing),
                         ("--max-range", max_range)):
@@ -185,7 +185,7 @@ def model(
     t0 = time.perf_counter()
     terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
     params = ModelParams(PeakParams(major_radius, minor_radius, min_prominence), k,
-                         CovisibilityParams(spacing, camera_height, max_range))
+                         CovisibilityParams(spacing, camera_height, max_range), HorizonParams(height=camera_height))
     built = build_model(terrain_dem, params, progress=progress and not json_out)
     save_model(built, out)
     seconds = time.perf_counter() - t0

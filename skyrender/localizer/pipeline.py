@@ -25,7 +25,8 @@ from ..features import ExtractedSkyline, extract_skyline, load_photo, skyline_pe
 from ..model import Model
 from ..render import Terrain, render_skylines
 from .constraints import interfeature_visibility, prior_in_view, segments_in_sky, skyline_limit
-from .hypotheses import generate_hypotheses
+from .horizon_search import HorizonSearchParams, horizon_poses
+from .hypotheses import Hypotheses, generate_hypotheses
 from .pose_solver import solve_poses
 from .refinement import Refined, refine_pose
 from .verification import ScoreParams, verify_poses
@@ -55,6 +56,8 @@ class LocalizeParams:
     min_confidence: float = 0.7  # abstain below this (wrong poses scored 0.51-0.59 on test views)
     same_pose_m: float = 150.0  # candidates closer than this (and same heading) are one
     ordered: bool = True  # probabilistic ordering (False: a seeded arbitrary order)
+    use_horizons: bool = True  # also match the skyline against the model's far horizons (no peaks needed)
+    horizon: HorizonSearchParams = field(default_factory=HorizonSearchParams)
     score: ScoreParams = field(default_factory=ScoreParams)
 
 
@@ -65,6 +68,7 @@ class LocalizeStats:
     rejected: dict = field(default_factory=lambda: {"residual": 0, "geometry": 0, "prior": 0,
                                                     "skyline_limit": 0, "interfeature_visibility": 0})
     verified: int = 0
+    horizon_poses: int = 0  # of the verified, poses from the far-horizon search
     refined: int = 0
     seconds: dict = field(default_factory=dict)
 
@@ -75,7 +79,7 @@ class LocalizeStats:
         solve = self.seconds.get("pose_solver", 0.0)
         return {"generated": self.generated, "evaluated": self.evaluated, "rejected": dict(self.rejected),
                 "rejected_share": {k: (v / self.evaluated if self.evaluated else 0.0) for k, v in self.rejected.items()},
-                "verified": self.verified, "refined": self.refined,
+                "verified": self.verified, "horizon_poses": self.horizon_poses, "refined": self.refined,
                 "seconds": {k: round(v, 4) for k, v in self.seconds.items()},
                 "hypotheses_per_second": self.evaluated / solve if solve > 0 else 0.0}
 
@@ -117,7 +121,7 @@ class _Candidate:
     f_px: float
     score: float  # verification scores (px): plain, and counting far skyline only
     trusted: float
-    points: np.ndarray  # (3, 3) the hypothesis' matched feature points
+    points: np.ndarray | None  # (3, 3) the hypothesis' matched feature points (None: from the horizons)
     refined: Refined | None = None
 
 
@@ -197,20 +201,35 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
         return LocalizationResult("abstained", None, None, 0.0, time.perf_counter() - t_start, stats.evaluated, stats,
                                   intrinsics, sky)
 
-    if len(peaks) < 3:
-        return abstain()
     tick = time.perf_counter()
-    peak_uv = np.array([[p.u, p.v] for p in peaks])
+    peak_uv = np.array([[p.u, p.v] for p in peaks]).reshape(-1, 2)
     in_view = model.features_for_prior(**prior) if prior else None
-    hyps = generate_hypotheses(peak_uv[:, 0], np.array([p.size for p in peaks]), model, in_view, params.ordered,
-                               neighbours=params.neighbours, k=params.neighbours_k)
-    hyps = hyps.take(slice(0, params.max_hypotheses))
+    hyps = Hypotheses(np.zeros((0, 3), np.int64), np.zeros((0, 3), np.int64), np.zeros(0))
+    if len(peaks) >= 3:
+        hyps = generate_hypotheses(peak_uv[:, 0], np.array([p.size for p in peaks]), model, in_view, params.ordered,
+                                   neighbours=params.neighbours, k=params.neighbours_k)
+        hyps = hyps.take(slice(0, params.max_hypotheses))
     in_sky = segments_in_sky(peak_uv, sky)
     stats.generated = len(hyps) * len(fovs)
     features = model.features.xyz
     stats.add_time("hypotheses", time.perf_counter() - tick)
 
     candidates: list[_Candidate] = []
+    if params.use_horizons and len(model.horizons):
+        for fov_i in fovs:
+            k_i = Intrinsics.from_fov(fov_i, W, H)
+            tick = time.perf_counter()
+            poses, _ = horizon_poses(model.horizons, sky, weights, k_i, model.dem, height, params.horizon)
+            if in_view is not None and len(poses):
+                poses = poses[prior_in_view(poses, features[in_view], sky, k_i, params.limit_tol_px, curvature)]
+            stats.generated += len(poses)
+            stats.add_time("horizon_search", time.perf_counter() - tick)
+            tick = time.perf_counter()
+            score, trusted = verify_poses(terrain, poses, k_i, sky, weights, params.verify_stride, params=params.score)
+            stats.verified += len(poses)
+            stats.horizon_poses += len(poses)
+            _add_candidates(candidates, poses, score, trusted, k_i.f_px, None, params)
+            stats.add_time("verification", time.perf_counter() - tick)
     accepted, stop_after = None, len(hyps)
     for start in range(0, len(hyps), params.chunk):
         if start >= stop_after:
@@ -244,17 +263,12 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
                 continue
             tick = time.perf_counter()
             unique = _dedupe(poses[idx])
-            score, trusted = verify_poses(terrain, poses[idx[unique]], k_i, sky, weights, params.verify_stride,
+            kept = idx[unique]
+            score, trusted = verify_poses(terrain, poses[kept], k_i, sky, weights, params.verify_stride,
                                           params=params.score)
             stats.verified += len(unique)
+            _add_candidates(candidates, poses[kept], score, trusted, f_px, features[chunk.features[kept]], params)
             stats.add_time("verification", time.perf_counter() - tick)
-            best = np.unique(np.r_[np.argsort(score)[: 4 * params.final_refinements],
-                                   np.argsort(trusted)[: 4 * params.final_refinements]])
-            for j in best[np.argsort(score[best])]:
-                h = idx[unique[j]]
-                if _distinct([c.pose for c in candidates], poses[h], params.same_pose_m):
-                    candidates.append(_Candidate(poses[h], f_px, float(score[j]), float(trusted[j]),
-                                                 features[chunk.features[h]]))
         candidates = _best_by_either(candidates, 8 * params.final_refinements)
         tick = time.perf_counter()
         budget = max(0, min(params.refine_per_chunk, params.max_refinements - stats.refined))
@@ -290,6 +304,18 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
         lonlat = (float(lon), float(lat))
     return LocalizationResult("localized", r.pose, k_best.fov, confidence, time.perf_counter() - t_start,
                               stats.evaluated, stats, k_best, sky, rendered, model.dem.crs, lonlat)
+
+
+def _add_candidates(candidates: list[_Candidate], poses: np.ndarray, score: np.ndarray, trusted: np.ndarray,
+                    f_px: float, points: np.ndarray | None, params: LocalizeParams) -> None:
+    """Append the best verified poses by each score (distinct from those already kept);
+    ``points`` (P, 3, 3): each pose's matched feature points, None for horizon poses."""
+    n = 4 * params.final_refinements
+    best = np.unique(np.r_[np.argsort(score)[:n], np.argsort(trusted)[:n]]).astype(np.int64)
+    for j in best[np.argsort(score[best])]:
+        if _distinct([c.pose for c in candidates], poses[j], params.same_pose_m):
+            candidates.append(_Candidate(poses[j], f_px, float(score[j]), float(trusted[j]),
+                                         None if points is None else points[j]))
 
 
 def _best_by_either(candidates: list[_Candidate], n: int) -> list[_Candidate]:

@@ -1,4 +1,4 @@
-"""Stage 1 — the model side (offline): peaks, neighbour sets, co-visibility.
+"""Stage 1 — the model side (offline): peaks, neighbour sets, co-visibility, far horizons.
 
 Entry point: :func:`build_model` (DEM -> :class:`Model`); :func:`save_model`
 and :func:`load_model` keep it in a versioned ``MODEL_DIR``.
@@ -12,15 +12,17 @@ from ..dem import DEM
 from ..errors import InputError
 from .covisibility import Covisibility, CovisibilityParams, learn_covisibility
 from .database import Model, ModelParams, load_model, save_model
+from .horizons import HorizonParams, Horizons, build_horizons
 from .neighbours import k_nearest_features
 from .peaks import PeakParams, PeakTable, find_peaks
 
 __all__ = ["build_model", "Model", "ModelParams", "PeakParams", "CovisibilityParams", "load_model", "save_model",
-           "find_peaks", "k_nearest_features", "learn_covisibility", "PeakTable", "Covisibility"]
+           "find_peaks", "k_nearest_features", "learn_covisibility", "PeakTable", "Covisibility", "HorizonParams",
+           "Horizons", "build_horizons"]
 
 
 def build_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None, progress: bool = False) -> Model:
-    """Build the model databases of a DEM: peaks -> k-nearest sets -> co-visibility.
+    """Build the model databases of a DEM: peaks -> k-nearest sets -> co-visibility -> far horizons.
 
     ``terrain`` (a :class:`~skyrender.render.Terrain` of the same DEM) may be passed to
     reuse its Mitsuba scene. InputError when the DEM has no peaks at all.
@@ -37,4 +39,5 @@ def build_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None, 
     neighbours = k_nearest_features(pivots.xyz[:, :2], features.xyz[:, :2], pivots.id, params.k)
     terrain = terrain or Terrain(dem)
     covis = learn_covisibility(terrain, features.xyz, params.covisibility, progress=progress)
-    return Model(dem, params, features, neighbours, covis, time.perf_counter() - t0)
+    horizons = build_horizons(terrain, params.horizons)
+    return Model(dem, params, features, neighbours, covis, horizons, time.perf_counter() - t0)

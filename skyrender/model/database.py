@@ -5,7 +5,8 @@ grid, CRS and name, the build parameters, counts and build time.
 ``MODEL_DIR/arrays.npz`` — the DEM elevations (so a model localizes on its
 own), the Model Feature Point Database (id, x, y, z, lon, lat, row, col,
 prominence, major), the pivots, their k nearest feature points, and the
-co-visibility counts (every feature pair).
+co-visibility counts (every feature pair), and the Model Horizon Database
+(grid centres and their far-horizon elevation angles, float16 degrees).
 
 A model whose format version, DEM fingerprint or parameters do not match
 what the caller expects is refused with a message saying so.
@@ -23,10 +24,11 @@ from affine import Affine
 from ..dem import DEM
 from ..errors import InputError
 from .covisibility import Covisibility, CovisibilityParams
+from .horizons import HorizonParams, Horizons
 from .peaks import PeakParams, PeakTable
 
 FORMAT = "skyrender-model"
-FORMAT_VERSION = 2  # 2: co-visibility counts for every feature pair, not only pivots'
+FORMAT_VERSION = 3  # 2: co-visibility counts for every feature pair, not only pivots'; 3: far horizons
 
 
 @dataclass(frozen=True)
@@ -34,13 +36,16 @@ class ModelParams:
     peaks: PeakParams = field(default_factory=PeakParams)
     k: int = 15
     covisibility: CovisibilityParams = field(default_factory=CovisibilityParams)
+    horizons: HorizonParams = field(default_factory=HorizonParams)
 
     def to_dict(self) -> dict:
-        return {"peaks": asdict(self.peaks), "k": self.k, "covisibility": asdict(self.covisibility)}
+        return {"peaks": asdict(self.peaks), "k": self.k, "covisibility": asdict(self.covisibility),
+                "horizons": asdict(self.horizons)}
 
     @classmethod
     def from_dict(cls, d: dict) -> "ModelParams":
-        return cls(PeakParams(**d["peaks"]), int(d["k"]), CovisibilityParams(**d["covisibility"]))
+        return cls(PeakParams(**d["peaks"]), int(d["k"]), CovisibilityParams(**d["covisibility"]),
+                   HorizonParams(**d["horizons"]))
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,6 +57,7 @@ class Model:
     features: PeakTable
     neighbours: np.ndarray  # (P, k) feature rows, -1 = none
     covisibility: Covisibility
+    horizons: Horizons
     build_seconds: float = 0.0
 
     @property
@@ -95,7 +101,8 @@ class Model:
         rows, cols = self.dem.shape
         return (f"model of {self.dem.name}: {len(self.features)} feature points ({int(self.features.major.sum())} major), "
                 f"k = {self.params.k}, {self.covisibility.n_viewpoints} viewpoints; grid {cols} x {rows} cells of "
-                f"{self.dem.cell_size[0]:g} m ({self.dem.crs or 'local frame'}); built in {self.build_seconds:.1f} s")
+                f"{self.dem.cell_size[0]:g} m ({self.dem.crs or 'local frame'}); {len(self.horizons)} far horizons; "
+                f"built in {self.build_seconds:.1f} s")
 
 
 def save_model(model: Model, out_dir) -> None:
@@ -124,6 +131,7 @@ def save_model(model: Model, out_dir) -> None:
         "elevation": model.dem.elevation, "id": f.id, "x": f.x, "y": f.y, "z": f.z, "lon": np.asarray(lon),
         "lat": np.asarray(lat), "row": f.row, "col": f.col, "prominence": f.prominence, "major": f.major,
         "neighbours": model.neighbours, "together": model.covisibility.together.astype(np.int32),
+        "horizon_centres": model.horizons.centres, "horizon_elevation": model.horizons.elevation.astype(np.float16),
     }
     try:
         tmp = os.path.join(out_dir, "arrays.tmp.npz")
@@ -171,4 +179,6 @@ def load_model(model_dir, dem: DEM | None = None, params: ModelParams | None = N
     features = PeakTable(arrays["id"], arrays["x"], arrays["y"], arrays["z"], arrays["row"], arrays["col"],
                          arrays["prominence"], arrays["major"].astype(bool))
     covis = Covisibility(int(meta["counts"]["viewpoints"]), arrays["together"])
-    return Model(dem, stored, features, arrays["neighbours"], covis, float(meta.get("build_seconds", 0.0)))
+    horizons = Horizons(arrays["horizon_centres"], arrays["horizon_elevation"].astype(np.float32),
+                        stored.horizons.bin_deg)
+    return Model(dem, stored, features, arrays["neighbours"], covis, horizons, float(meta.get("build_seconds", 0.0)))

@@ -10,6 +10,11 @@ Modes: ``subpixel`` (continuous v, bisected until the error is at most ``tol`` p
 integer (the top edge of the first row whose *centre* ray hits: exactly
 what a one-sample-per-pixel full render gives).
 
+Near clip (``near_m``): terrain nearer than that is ignored — what a
+skyline looks like from anywhere within a few hundred metres (the far
+horizon). Rays start ``near_m`` out; one that starts under the ground counts
+as a hit (the terrain there rises above it), which keeps each column monotone.
+
 Batched: one Dr.Jit kernel runs every column of every pose — thousands of
 poses per call. Pose values enter as array buffers, never literals, so a new
 pose does not recompile the kernel, and the kernel is frozen (``dr.freeze``)
@@ -37,7 +42,8 @@ def skyline_iterations(height: int, subpixel: bool, tol: float) -> int:
 
 
 def render_skylines(terrain: Terrain, poses, intrinsics: Intrinsics, *, subpixel: bool = True,
-                    tol: float = 0.05, per_pose_intrinsics=None, with_distance: bool = False):
+                    tol: float = 0.05, per_pose_intrinsics=None, with_distance: bool = False,
+                    near_m: float = 0.0):
     """Skylines of many poses.
 
     Parameters
@@ -49,6 +55,7 @@ def render_skylines(terrain: Terrain, poses, intrinsics: Intrinsics, *, subpixel
     tol : sub-pixel tolerance in px.
     per_pose_intrinsics : optional (P, 3) array of (f_px, cx, cy) overriding the default.
     with_distance : also return how far away (m) each column's skyline terrain lies.
+    near_m : ignore terrain nearer than this (m); 0 = none.
 
     Returns
     -------
@@ -71,7 +78,7 @@ def render_skylines(terrain: Terrain, poses, intrinsics: Intrinsics, *, subpixel
         sl = slice(start, start + per_launch)
         basis = np.concatenate([origins[sl], d0[sl], du[sl], dv[sl]], axis=1)
         kernel = _skyline_kernel if terrain.jit else _skyline_scalar
-        result = kernel(terrain, basis, W, H, subpixel, n_iter, with_distance)
+        result = kernel(terrain, basis, W, H, subpixel, n_iter, with_distance, float(near_m))
         if with_distance:
             out[sl], distance[sl] = result
         else:
@@ -82,7 +89,7 @@ def render_skylines(terrain: Terrain, poses, intrinsics: Intrinsics, *, subpixel
 
 
 def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixel: bool, n_iter: int,
-                    with_distance: bool = False):
+                    with_distance: bool = False, near_m: float = 0.0):
     """Run :func:`_bisect_columns` for every (pose, column) and return (P, W) float64
     skylines (and distances, with ``with_distance``)."""
     import drjit as dr
@@ -90,11 +97,11 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
     mi = terrain.mi
     P = len(basis)
     global _frozen_bisect
-    if _frozen_bisect is None:  # recorded once per (W, H, mode, iterations, distances), then replayed
+    if _frozen_bisect is None:  # recorded once per (W, H, mode, iterations, distances, clip), then replayed
         _frozen_bisect = dr.freeze(_bisect_columns)
     result = _frozen_bisect(terrain.scene, mi.Float(basis.astype(np.float32).ravel()),
                             dr.arange(mi.UInt32, P * W), mi.Float(terrain.max_distance), W, H, subpixel, n_iter,
-                            with_distance)
+                            with_distance, near_m > 0, mi.Float(near_m))
     if with_distance:
         return tuple(np.array(r, dtype=np.float64).reshape(P, W) for r in result)
     return np.array(result, dtype=np.float64).reshape(P, W)
@@ -103,9 +110,11 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
 _frozen_bisect = None
 
 
-def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_iter: int, with_distance: bool = False):
+def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_iter: int, with_distance: bool = False,
+                    near_clip: bool = False, near=None):
     """One Dr.Jit kernel: thread = (pose, column); a symbolic loop bisects v; with
-    ``with_distance`` one more ray, on the terrain side of the boundary, measures its distance.
+    ``with_distance`` one more ray, on the terrain side of the boundary, measures its distance;
+    with ``near_clip`` rays start ``near`` metres out (and one starting under the ground hits).
 
     ``buf`` holds 12 floats per pose (mesh-space origin and the ray basis d0, du, dv);
     ``idx`` enumerates pose * W + column. Frozen by ``dr.freeze``: the Python tracing of
@@ -127,15 +136,22 @@ def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_ite
     a = mi.Vector3f(g(3), g(4), g(5)) + (mi.Float(col) + 0.5) * du
 
     def ray(v):
-        return mi.Ray3f(o, dr.normalize(a + v * dv), maxt, 0.0, [])
+        d = dr.normalize(a + v * dv)
+        if near_clip:
+            return mi.Ray3f(o + near * d, d, maxt, 0.0, [])
+        return mi.Ray3f(o, d, maxt, 0.0, [])
 
     def hits(v):
-        return scene.ray_test(ray(v))
+        r = ray(v)
+        if near_clip:  # a start under the ground: the terrain there rises above the ray
+            return scene.ray_test(r) | scene.ray_test(mi.Ray3f(r.o, mi.Vector3f(0.0, 0.0, 1.0), maxt, 0.0, []))
+        return scene.ray_test(r)
 
     def with_distance_of(v, v_terrain):
         if not with_distance:
             return v
         t = scene.ray_intersect_preliminary(ray(v_terrain)).t
+        t = t + near if near_clip else t
         return v, dr.select(dr.isnan(v) | (t >= maxt), dr.inf, t)
 
     if subpixel:
@@ -162,7 +178,7 @@ def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_ite
 
 
 def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixel: bool, n_iter: int,
-                    with_distance: bool = False):
+                    with_distance: bool = False, near_m: float = 0.0):
     """The same bisection in numpy for the scalar fallback variant (slow)."""
     P = len(basis)
     o = np.repeat(basis[:, 0:3], W, axis=0)
@@ -170,15 +186,23 @@ def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
     dv = np.repeat(basis[:, 9:12], W, axis=0)
     a = np.repeat(basis[:, 3:6], W, axis=0) + (np.tile(np.arange(W), P) + 0.5)[:, None] * du
 
+    def unit(v):
+        d = a + np.asarray(v)[:, None] * dv
+        return d / np.linalg.norm(d, axis=1, keepdims=True)
+
     def hits(v):
-        return terrain.mesh_ray_test(o, a + np.asarray(v)[:, None] * dv)
+        d = unit(v)
+        if near_m > 0:
+            start = o + near_m * d
+            return terrain.mesh_ray_test(start, d) | terrain.mesh_ray_test(start, np.broadcast_to([0.0, 0.0, 1.0], d.shape))
+        return terrain.mesh_ray_test(o, d)
 
     def with_distance_of(v, v_terrain):
         if not with_distance:
             return v.reshape(P, W)
-        d = a + np.asarray(v_terrain)[:, None] * dv
-        t, _ = terrain.mesh_intersect(o, d / np.linalg.norm(d, axis=1, keepdims=True))
-        return v.reshape(P, W), np.where(np.isnan(v), np.inf, t).reshape(P, W)
+        d = unit(v_terrain)
+        t, _ = terrain.mesh_intersect(o + near_m * d, d)
+        return v.reshape(P, W), np.where(np.isnan(v), np.inf, t + near_m).reshape(P, W)
 
     n = P * W
     if subpixel:

@@ -1,0 +1,129 @@
+"""Stage 3c — hypotheses from the far horizons (beyond the paper).
+
+Three-point hypotheses need three of the photo's skyline peaks to be model
+feature points; on some views they are not (a near ridge fills part of the
+frame, or the matched peaks sit far apart). This stage needs no peaks: the
+photo's skyline, turned into directions (azimuth relative to the optical axis,
+elevation; camera assumed level), is compared with the Model Horizon Database's
+far horizon around every grid centre at every azimuth bin — one FFT
+cross-correlation per term for all azimuths at once. The camera's tilt, swing
+and the level assumption's error are absorbed by fitting, per (centre,
+azimuth), elevation offset + a alpha + b alpha^2 (alpha the relative azimuth, rad)
+by weighted least squares: the cost is the mean squared residual (deg^2).
+
+A near ridge in the photo does not appear in a far horizon, so besides the whole
+skyline, windows of it (its left or right part) are matched too, and each
+window's best (centre, azimuth) pairs become poses for verification.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.fft
+
+from ..camera import Intrinsics, pixel_directions
+from ..model import Horizons
+from .pose_solver import camera_centres
+
+#: Windows of the photo's skyline matched on their own (fractions of its azimuth span).
+WINDOWS = ((0.0, 1.0), (0.0, 0.65), (0.35, 1.0), (0.0, 0.5), (0.5, 1.0))
+
+
+@dataclass(frozen=True)
+class HorizonSearchParams:
+    windows: tuple = WINDOWS
+    per_window: int = 200  # best (centre, azimuth) pairs kept per window
+    min_bins: int = 12  # a window needs this many azimuth bins of skyline
+
+
+def skyline_directions(skyline: np.ndarray, weights: np.ndarray, intrinsics: Intrinsics,
+                       bin_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The photo's skyline (W,) as elevation angles (deg) on azimuth bins (bin_deg)
+    relative to the optical axis, for a level camera: (bins (n,) int, elevation (n,),
+    weights (n,)). Columns without terrain (NaN) are left out."""
+    u = np.arange(len(skyline)) + 0.5
+    good = np.isfinite(skyline)
+    if good.sum() < 2:
+        return np.zeros(0, np.int64), np.zeros(0), np.zeros(0)
+    d = pixel_directions(u[good], skyline[good], np.zeros(6), intrinsics)
+    az = np.degrees(np.arctan2(d[:, 0], d[:, 1]))
+    el = np.degrees(np.arcsin(np.clip(d[:, 2], -1.0, 1.0)))
+    bins = np.arange(np.ceil(az.min() / bin_deg), np.floor(az.max() / bin_deg) + 1).astype(np.int64)
+    return bins, np.interp(bins * bin_deg, az, el), np.interp(bins * bin_deg, az, weights[good])
+
+
+def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.ndarray, elevation: np.ndarray,
+                  weights: np.ndarray, bin_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted mean squared residual (deg^2) of every (centre, azimuth) after the
+    fit of offset + a alpha + b alpha^2, and the fitted offset (deg): each (N, n_bins).
+
+    spectra : rfft over azimuth of the horizons P (N, n_bins) and of P^2.
+    bins, elevation, weights : the photo's skyline (:func:`skyline_directions`).
+    Azimuth bin p means the optical axis points at p * bin_deg.
+    """
+    spec_p, spec_p2 = spectra
+    alpha = np.radians(bins * bin_deg)
+    X = np.column_stack([np.ones_like(alpha), alpha, alpha ** 2])
+    idx = bins % n_bins
+
+    def spread(values: np.ndarray) -> np.ndarray:
+        g = np.zeros(n_bins)
+        np.add.at(g, idx, values)
+        return np.conj(scipy.fft.rfft(g)).astype(np.complex64)
+
+    def correlate(spec: np.ndarray, conj_g: np.ndarray) -> np.ndarray:  # out[:, p] = sum_i P[:, i + p] g[i]
+        return scipy.fft.irfft(spec * conj_g, n=n_bins, axis=1, workers=-1)
+
+    def correlate2(spec_a, conj_a, spec_b, conj_b) -> np.ndarray:  # the sum of two, in one inverse transform
+        return scipy.fft.irfft(spec_a * conj_a + spec_b * conj_b, n=n_bins, axis=1, workers=-1)
+
+    w = weights
+    wsum = max(float(w.sum()), 1e-9)
+    # sum w (P - e)^2 = sum w P^2 - 2 sum w e P + sum w e^2
+    cost = correlate2(spec_p2, spread(w), spec_p, spread(-2.0 * w * elevation))
+    cost += np.float32((w * elevation ** 2).sum())
+    # r = X^T W (P - e) per (centre, azimuth); the fit removes r^T gram^-1 r
+    r = [correlate(spec_p, spread(w * X[:, k])) - np.float32((w * X[:, k] * elevation).sum()) for k in range(3)]
+    inv = np.linalg.inv((X * w[:, None]).T @ X + 1e-9 * np.eye(3)).astype(np.float32)
+    for i in range(3):
+        for j in range(i, 3):
+            cost -= (inv[i, j] * (1.0 if i == j else 2.0)) * r[i] * r[j]
+    offset = inv[0, 0] * r[0] + inv[0, 1] * r[1] + inv[0, 2] * r[2]
+    cost /= np.float32(wsum)
+    return cost, offset
+
+
+def horizon_poses(horizons: Horizons, skyline: np.ndarray, weights: np.ndarray, intrinsics: Intrinsics, dem,
+                  height: float, params: HorizonSearchParams = HorizonSearchParams()) -> tuple[np.ndarray, np.ndarray]:
+    """Poses (K, 6) of the best (centre, azimuth) pairs of each window, camera ``height``
+    m above the centre's ground, pan = azimuth, tilt = fitted offset, swing 0; and their
+    costs (K,) (deg^2). Empty when the skyline is too short for any window."""
+    n_bins = horizons.elevation.shape[1]
+    bins, elevation, w = skyline_directions(skyline, weights, intrinsics, horizons.bin_deg)
+    if len(horizons) == 0 or len(bins) < params.min_bins:
+        return np.zeros((0, 6)), np.zeros(0)
+    spectra = horizons.spectra
+    frac = (bins - bins[0]) / max(bins[-1] - bins[0], 1)
+    picked: dict[tuple[int, int], tuple[float, float]] = {}
+    for lo, hi in params.windows:
+        w_win = w * ((frac >= lo) & (frac <= hi))
+        if np.count_nonzero(w_win) < params.min_bins:
+            continue
+        cost, offset = horizon_costs(spectra, n_bins, bins, elevation, w_win, horizons.bin_deg)
+        cost, offset = cost.ravel(), offset.ravel()
+        k = min(params.per_window, cost.size)
+        best = np.argpartition(cost, k - 1)[:k]
+        for flat in best[np.argsort(cost[best])]:
+            key = divmod(int(flat), n_bins)
+            if key not in picked:
+                picked[key] = (float(cost[flat]), float(offset[flat]))
+    if not picked:
+        return np.zeros((0, 6)), np.zeros(0)
+    keys = np.array(list(picked.keys()), np.int64)
+    vals = np.array(list(picked.values()))
+    centres = camera_centres(dem, horizons.centres[keys[:, 0], :2], height)
+    poses = np.column_stack([centres, keys[:, 1] * horizons.bin_deg, vals[:, 1], np.zeros(len(keys))])
+    order = np.argsort(vals[:, 0], kind="stable")
+    return poses[order], vals[order, 0]
