@@ -55,9 +55,10 @@ def skyline_directions(skyline: np.ndarray, weights: np.ndarray, intrinsics: Int
 
 
 def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.ndarray, elevation: np.ndarray,
-                  weights: np.ndarray, bin_deg: float) -> tuple[np.ndarray, np.ndarray]:
+                  weights: np.ndarray, bin_deg: float):
     """Weighted mean squared residual (deg^2) of every (centre, azimuth) after the
-    fit of offset + a alpha + b alpha^2, and the fitted offset (deg): each (N, n_bins).
+    fit of offset + a alpha + b alpha^2, (N, n_bins); and a function giving the fitted
+    offset (deg) at flat indices of it.
 
     spectra : rfft over azimuth of the horizons P (N, n_bins) and of P^2.
     bins, elevation, weights : the photo's skyline (:func:`skyline_directions`).
@@ -80,19 +81,27 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
         return scipy.fft.irfft(spec_a * conj_a + spec_b * conj_b, n=n_bins, axis=1, workers=-1)
 
     w = weights
-    wsum = max(float(w.sum()), 1e-9)
     # sum w (P - e)^2 = sum w P^2 - 2 sum w e P + sum w e^2
     cost = correlate2(spec_p2, spread(w), spec_p, spread(-2.0 * w * elevation))
     cost += np.float32((w * elevation ** 2).sum())
     # r = X^T W (P - e) per (centre, azimuth); the fit removes r^T gram^-1 r
-    r = [correlate(spec_p, spread(w * X[:, k])) - np.float32((w * X[:, k] * elevation).sum()) for k in range(3)]
+    r = []
+    for k in range(3):
+        r.append(correlate(spec_p, spread(w * X[:, k])))
+        r[k] -= np.float32((w * X[:, k] * elevation).sum())
     inv = np.linalg.inv((X * w[:, None]).T @ X + 1e-9 * np.eye(3)).astype(np.float32)
+    term = np.empty_like(cost)
     for i in range(3):
         for j in range(i, 3):
-            cost -= (inv[i, j] * (1.0 if i == j else 2.0)) * r[i] * r[j]
-    offset = inv[0, 0] * r[0] + inv[0, 1] * r[1] + inv[0, 2] * r[2]
-    cost /= np.float32(wsum)
-    return cost, offset
+            np.multiply(r[i], r[j], out=term)
+            term *= inv[i, j] * (1.0 if i == j else 2.0)
+            cost -= term
+    cost /= np.float32(max(float(w.sum()), 1e-9))
+
+    def offset_at(flat: np.ndarray) -> np.ndarray:  # the fitted offset (deg) at flat indices, computed there only
+        return sum(inv[0, k] * r[k].ravel()[flat] for k in range(3))
+
+    return cost, offset_at
 
 
 def horizon_poses(horizons: Horizons, skyline: np.ndarray, weights: np.ndarray, intrinsics: Intrinsics, dem,
@@ -111,14 +120,15 @@ def horizon_poses(horizons: Horizons, skyline: np.ndarray, weights: np.ndarray, 
         w_win = w * ((frac >= lo) & (frac <= hi))
         if np.count_nonzero(w_win) < params.min_bins:
             continue
-        cost, offset = horizon_costs(spectra, n_bins, bins, elevation, w_win, horizons.bin_deg)
-        cost, offset = cost.ravel(), offset.ravel()
+        cost, offset_at = horizon_costs(spectra, n_bins, bins, elevation, w_win, horizons.bin_deg)
+        cost = cost.ravel()
         k = min(params.per_window, cost.size)
         best = np.argpartition(cost, k - 1)[:k]
-        for flat in best[np.argsort(cost[best])]:
+        best = best[np.argsort(cost[best])]
+        for flat, offset in zip(best, offset_at(best)):
             key = divmod(int(flat), n_bins)
             if key not in picked:
-                picked[key] = (float(cost[flat]), float(offset[flat]))
+                picked[key] = (float(cost[flat]), float(offset))
     if not picked:
         return np.zeros((0, 6)), np.zeros(0)
     keys = np.array(list(picked.keys()), np.int64)

@@ -28,7 +28,7 @@ class HorizonParams:
     spacing: float = 250.0  # metres between grid centres (coarser when over max_centres)
     height: float = 2.0  # camera height above ground (m)
     near_m: float = 1000.0  # terrain nearer than this is left out (m)
-    bin_deg: float = 0.5  # azimuth bins (deg)
+    bin_deg: float = 1.0  # azimuth bins (deg): 0.5 ranked right poses no better after verification, at twice the time
     max_centres: int = 40_000  # bounds memory and build time on large DEMs
 
 
