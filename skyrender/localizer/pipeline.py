@@ -49,7 +49,7 @@ class LocalizeParams:
     refine_per_chunk: int = 1  # best new candidates (by each score) refined after each chunk
     final_refinements: int = 3  # distinct candidates refined at the end
     max_refinements: int = 16  # refinements in all (each ~0.3 s)
-    give_up_sweep_px: float = 1.5  # a refinement whose resection sweep fits no better than this stops there
+    give_up_sweep_px: float = 1.5  # a refinement whose first stage fits no better than this stops there
     accept_score_px: float = 0.3  # stop early once a refined pose scores this well...
     accept_agreement: float = 0.95  # ...and agrees on this share of columns
     confirm_chunks: int = 2  # then go on this many chunks: a pose tens of metres off can score that well too

@@ -138,7 +138,7 @@ def _box_offsets(pose: np.ndarray, along_m: float, across_m: float, n_along: int
 def local_search(terrain: Terrain, seeds: list[np.ndarray], intrinsics: Intrinsics, height: float,
                  image_skyline: np.ndarray, weights: np.ndarray, f_px: float, stride: int = 2,
                  points: np.ndarray | None = None, beam: int = SEARCH_BEAM, params: ScoreParams = ScoreParams(),
-                 widest_m: float = np.inf) -> tuple[np.ndarray, int]:
+                 widest_m: float = np.inf, give_up_px: float = np.inf) -> tuple[np.ndarray, int, bool]:
     """Coarse-to-fine grid search over (x, y) around ``seeds`` (poses (6,)), elongated
     along the line of sight, with the orientation re-aligned per position
     (:func:`align_skylines`); levels of ``SEARCH_LEVELS`` no wider than ``widest_m``.
@@ -146,7 +146,9 @@ def local_search(terrain: Terrain, seeds: list[np.ndarray], intrinsics: Intrinsi
     next: the score is flat along the line of sight and one seed can fall into the
     wrong dip. ``points`` (n, 3): the hypothesis' matched feature points; positions
     from which one of them is hidden are not rendered (a camera 2 m up sees its peaks
-    from narrow strips of ground only). Returns the best pose and the number of renders used."""
+    from narrow strips of ground only). The search stops after its first level when the
+    best pose there scores worse than ``give_up_px``. Returns the best pose, the number
+    of renders used and whether it gave up."""
     dem = terrain.dem
     k_full = replace(intrinsics, f_px=f_px)
     seeds, renders = [np.asarray(seed, np.float64).copy() for seed in seeds], 0
@@ -175,7 +177,9 @@ def local_search(terrain: Terrain, seeds: list[np.ndarray], intrinsics: Intrinsi
         poses[:, 5] = poses[:, 5] - np.degrees(np.arctan(c))
         spacing = min(2 * level[1] / max(level[3] - 1, 1), 2 * level[0] / max(level[2] - 1, 1))
         seeds = best_apart(poses, score, beam, spacing)
-    return seeds[0], renders
+        if n_level == 0 and score.min() > give_up_px:
+            return seeds[0], renders, True
+    return seeds[0], renders, False
 
 
 def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, height: float,
@@ -186,7 +190,9 @@ def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, heig
     """Refine one pose (6,) against the photo's skyline (W,): resection sweep (with
     three matched ``points``), local search, then least squares. When the sweep's best
     score exceeds ``give_up_px`` the candidate is wrong (on the benchmark views right
-    ones swept to <= 0.27 px, wrong ones >= 0.7 px) and its best swept pose is returned."""
+    ones swept to <= 0.27 px, wrong ones >= 0.7 px) and its best swept pose is returned;
+    without points, the same when the local search's first level scores worse (right
+    far-horizon candidates 0.39-0.67 px there on view 1, wrong ones 2.75-3.87 on view 5)."""
     f0 = intrinsics.f_px if f_px is None else float(f_px)
     start = np.asarray(pose, np.float64)
     seeds, renders, widest, swept = [start], 0, np.inf, np.nan
@@ -198,11 +204,14 @@ def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, heig
     if swept > give_up_px:
         stages.append(np.r_[seeds[0][[0, 1, 3, 4, 5]], f0])
         return _best_stage(terrain, stages, height, intrinsics, image_skyline, weights, params, renders, seeds[0])
-    pose, n = local_search(terrain, seeds, intrinsics, height, image_skyline, weights, f0, points=points,
-                           params=params, widest_m=widest)
+    pose, n, gave_up = local_search(terrain, seeds, intrinsics, height, image_skyline, weights, f0, points=points,
+                                    params=params, widest_m=widest,
+                                    give_up_px=give_up_px if points is None else np.inf)
     renders += n
     q = np.r_[pose[0], pose[1], pose[3], pose[4], pose[5], f0]
     stages.append(q)
+    if gave_up:
+        return _best_stage(terrain, stages, height, intrinsics, image_skyline, weights, params, renders, pose)
     for free in ([2, 3, 4], [0, 1, 2, 3, 4] + ([5] if fit_focal else [])):
         q, n = _least_squares(terrain, q, free, intrinsics, height, image_skyline, weights, max_nfev, params)
         stages.append(q)

@@ -98,7 +98,7 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
     P = len(basis)
     global _frozen_bisect
     if _frozen_bisect is None:  # recorded once per (W, H, mode, iterations, distances, clip), then replayed
-        _frozen_bisect = dr.freeze(_bisect_columns)
+        _frozen_bisect = dr.freeze(_bisect_columns, warn_after=64)  # one recording per image size and mode
     result = _frozen_bisect(terrain.scene, mi.Float(basis.astype(np.float32).ravel()),
                             dr.arange(mi.UInt32, P * W), mi.Float(terrain.max_distance), W, H, subpixel, n_iter,
                             with_distance, near_m > 0, mi.Float(near_m))
