@@ -312,6 +312,51 @@ def test_localizes_a_photo_of_the_synthetic_scene_with_no_prior(scene, views):
     json.dumps(doc)  # serialisable as it is
 
 
+def test_far_horizon_search_puts_the_camera_among_its_poses(scene, views):
+    """View 3: a ridge 250 m away fills a third of the frame and no three of its skyline
+    peaks form a model triple. Matching the skyline (and its right part) against the
+    model's far horizons still gives a pose within a grid step of the camera, looking
+    the right way, and the verification ranks it near the top."""
+    from skyrender.features import extract_skyline
+    from skyrender.localizer.horizon_search import horizon_poses
+    from skyrender.localizer.verification import verify_poses
+
+    dem, terrain, model = scene
+    pose = views.poses[3]
+    sky = extract_skyline(_photo(terrain, pose))
+    poses, cost = horizon_poses(model.horizons, sky.skyline, sky.confidence, K, dem, 2.0)
+    assert len(poses) == len(cost) > 100 and np.all(np.diff(cost) >= 0)
+    step = np.sqrt(2.0) * 250.0 / 2.0
+    near = (np.hypot(poses[:, 0] - pose.x, poses[:, 1] - pose.y) <= step + 1.0) & (
+        np.abs((poses[:, 3] - pose.pan + 180.0) % 360.0 - 180.0) <= 3.0)
+    assert near.any()
+    assert np.abs(poses[near, 4] - pose.tilt).min() < 1.0  # the fitted offset is the tilt
+    score, trusted = verify_poses(terrain, poses, K, sky.skyline, sky.confidence)
+    assert min((score < score[near].min()).sum(), (trusted < trusted[near].min()).sum()) < 12
+
+
+def test_localizes_from_the_far_horizons_alone(scene, views):
+    """No peak hypotheses at all (two image peaks taken): the far-horizon poses, verified
+    and refined, localize view 1 (whose matched peaks lie at opposite edges of the frame)."""
+    _, terrain, model = scene
+    pose = views.poses[1]
+    result = localize(_photo(terrain, pose), model, 2.0, 60.0, terrain=terrain,
+                      params=LocalizeParams(n_peaks=2))
+    _assert_close(result, pose)
+    assert result.stats.evaluated == 0 and result.stats.horizon_poses > 100
+
+
+def test_localizes_a_view_whose_peaks_form_no_model_triple(scene, views):
+    """View 3 (see above) abstained with three-point hypotheses alone."""
+    _, terrain, model = scene
+    pose = views.poses[3]
+    result = localize(_photo(terrain, pose), model, 2.0, 60.0, terrain=terrain)
+    _assert_close(result, pose)
+    without = localize(_photo(terrain, pose), model, 2.0, 60.0, terrain=terrain,
+                       params=LocalizeParams(use_horizons=False, max_hypotheses=300_000))
+    assert not without.localized
+
+
 def test_abstains_on_an_all_sky_image(scene):
     _, terrain, model = scene
     sky = np.zeros((240, 320, 3), np.uint8)

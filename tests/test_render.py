@@ -228,3 +228,32 @@ def test_photo_is_deterministic_and_its_skyline_is_the_sky_boundary(tujunga_terr
     img = a.image.astype(float)
     assert img[sky].mean() > img[ground].mean() + 30
     assert (img[sky][:, 2] > img[sky][:, 0]).mean() > 0.95
+
+
+def test_far_horizons_equal_a_march_over_the_dem(tujunga_terrain):
+    """Panoramic far horizons (near clip 1 km) against an independent computation: the
+    largest apparent elevation angle of the DEM surface (earth curvature and refraction
+    applied) sampled every 5 m along each azimuth from 1 km out. Without the clip the
+    horizon can only be higher (near terrain adds to it)."""
+    from skyrender.camera import earth_drop
+    from skyrender.render.horizon import render_horizons
+
+    dem = tujunga_terrain.dem
+    cx, cy = dem.centre
+    centres = np.array([[x, y, float(dem.ground(x, y)) + 2.0] for x, y in ((cx, cy), (cx - 3000.0, cy + 2000.0))])
+    far = render_horizons(tujunga_terrain, centres, bin_deg=2.0, near_m=1000.0)
+    full = render_horizons(tujunga_terrain, centres, bin_deg=2.0)
+    assert far.shape == (2, 180)
+    assert (full >= far - 0.05).all()
+    assert (full > far + 1.0).any()  # the near terrain matters somewhere
+    az = np.radians(np.arange(180) * 2.0)
+    d = np.arange(1000.0, 60_000.0, 5.0)
+    for centre, rendered in zip(centres, far):
+        x = centre[0] + d[None, :] * np.sin(az)[:, None]
+        y = centre[1] + d[None, :] * np.cos(az)[:, None]
+        angle = np.degrees(np.arctan2(dem.ground(x, y) - earth_drop(d, True) - centre[2], d))
+        expected = np.nanmax(angle, axis=1)
+        err = np.abs(rendered - expected)
+        print(f"far horizon vs march: median {np.median(err):.3f} deg, 90th pct {np.percentile(err, 90):.3f}, "
+              f"max {err.max():.3f}")
+        assert np.median(err) < 0.05 and np.percentile(err, 90) < 0.25

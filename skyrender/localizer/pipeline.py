@@ -48,7 +48,8 @@ class LocalizeParams:
     verify_stride: int = 4  # every n-th column in the verification renders
     refine_per_chunk: int = 1  # best new candidates (by each score) refined after each chunk
     final_refinements: int = 3  # distinct candidates refined at the end
-    max_refinements: int = 16  # refinements in all (each ~0.3 s)
+    max_refinements: int = 16  # refinements of three-point candidates in all (each ~0.3 s)...
+    max_horizon_refinements: int = 8  # ...and of far-horizon ones, each budget apart: neither crowds out the other
     give_up_sweep_px: float = 1.5  # a refinement whose first stage fits no better than this stops there
     accept_score_px: float = 0.3  # stop early once a refined pose scores this well...
     accept_agreement: float = 0.95  # ...and agrees on this share of columns
@@ -269,10 +270,12 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
             stats.verified += len(unique)
             _add_candidates(candidates, poses[kept], score, trusted, f_px, features[chunk.features[kept]], params)
             stats.add_time("verification", time.perf_counter() - tick)
-        candidates = _best_by_either(candidates, 8 * params.final_refinements)
+        candidates = [c for from_peaks in (True, False) for c in _best_by_either(
+            [c for c in candidates if (c.points is not None) == from_peaks], 8 * params.final_refinements)]
         tick = time.perf_counter()
-        budget = max(0, min(params.refine_per_chunk, params.max_refinements - stats.refined))
-        for cand in _next_to_refine(candidates, budget):
+        # once a pose is accepted, the confirming chunks refine new three-point candidates only:
+        # the far-horizon ones are the same in every chunk and their best have been refined
+        for cand in _next_to_refine(candidates, params.refine_per_chunk, params, horizons=accepted is None):
             _refine(cand, terrain, intrinsics, height, sky, weights, fov is None, params, stats)
         stats.add_time("refinement", time.perf_counter() - tick)
         done = [c for c in candidates if c.refined is not None]
@@ -284,7 +287,7 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
 
     tick = time.perf_counter()
     final = params.final_refinements if accepted is None else 0
-    for cand in _next_to_refine(candidates, final):
+    for cand in _next_to_refine(candidates, final, params, budgeted=False):
         _refine(cand, terrain, intrinsics, height, sky, weights, fov is None, params, stats)
     stats.add_time("refinement", time.perf_counter() - tick)
     done = sorted([c for c in candidates if c.refined is not None], key=lambda c: c.refined.score)
@@ -312,8 +315,10 @@ def _add_candidates(candidates: list[_Candidate], poses: np.ndarray, score: np.n
     ``points`` (P, 3, 3): each pose's matched feature points, None for horizon poses."""
     n = 4 * params.final_refinements
     best = np.unique(np.r_[np.argsort(score)[:n], np.argsort(trusted)[:n]]).astype(np.int64)
+    kept = [c.pose for c in candidates if (c.points is None) == (points is None)]  # each source apart
     for j in best[np.argsort(score[best])]:
-        if _distinct([c.pose for c in candidates], poses[j], params.same_pose_m):
+        if _distinct(kept, poses[j], params.same_pose_m):
+            kept.append(poses[j])
             candidates.append(_Candidate(poses[j], f_px, float(score[j]), float(trusted[j]),
                                          None if points is None else points[j]))
 
@@ -325,9 +330,18 @@ def _best_by_either(candidates: list[_Candidate], n: int) -> list[_Candidate]:
     return sorted(keep.values(), key=lambda c: c.score)
 
 
-def _next_to_refine(candidates: list[_Candidate], n: int) -> list[_Candidate]:
-    """:func:`_best_by_either` among the candidates not refined yet."""
-    return _best_by_either([c for c in candidates if c.refined is None], n)
+def _next_to_refine(candidates: list[_Candidate], n: int, params: LocalizeParams,
+                    budgeted: bool = True, horizons: bool = True) -> list[_Candidate]:
+    """:func:`_best_by_either` among the candidates not refined yet, up to ``n`` of the
+    three-point and (with ``horizons``) ``n`` of the far-horizon ones, within each one's
+    refinement budget when ``budgeted``."""
+    picked = []
+    sources = ((True, params.max_refinements), (False, params.max_horizon_refinements))
+    for from_peaks, limit in sources if horizons else sources[:1]:
+        mine = [c for c in candidates if (c.points is not None) == from_peaks]
+        budget = max(0, min(n, limit - sum(c.refined is not None for c in mine))) if budgeted else n
+        picked += _best_by_either([c for c in mine if c.refined is None], budget)
+    return picked
 
 
 def _apply(idx: np.ndarray, ok: np.ndarray, stats: LocalizeStats, name: str) -> np.ndarray:
