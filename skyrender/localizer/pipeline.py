@@ -59,6 +59,7 @@ class LocalizeParams:
     ordered: bool = True  # probabilistic ordering (False: a seeded arbitrary order)
     use_horizons: bool = True  # also match the skyline against the model's far horizons (no peaks needed)
     horizon: HorizonSearchParams = field(default_factory=HorizonSearchParams)
+    horizon_fov_step: tuple = (5.0, 2.5, 1.25)  # unknown fov: probes around the best fov of the far-horizon search
     score: ScoreParams = field(default_factory=ScoreParams)
 
 
@@ -217,7 +218,10 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
 
     candidates: list[_Candidate] = []
     if params.use_horizons and len(model.horizons):
-        for fov_i in fovs:
+        verified = {}  # fov -> (f_px, poses, plain score, trusted score)
+
+        def verify_horizons_at(fov_i: float) -> float:
+            """Far-horizon poses at one fov, verified; returns their best plain score (px)."""
             k_i = Intrinsics.from_fov(fov_i, W, H)
             tick = time.perf_counter()
             poses, _ = horizon_poses(model.horizons, sky, weights, k_i, model.dem, height, params.horizon)
@@ -229,8 +233,18 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
             score, trusted = verify_poses(terrain, poses, k_i, sky, weights, params.verify_stride, params=params.score)
             stats.verified += len(poses)
             stats.horizon_poses += len(poses)
-            _add_candidates(candidates, poses, score, trusted, k_i.f_px, None, params)
             stats.add_time("verification", time.perf_counter() - tick)
+            verified[fov_i] = (k_i.f_px, poses, score, trusted)
+            return _best_of(score)
+
+        for fov_i in fovs:
+            verify_horizons_at(fov_i)
+        if fov is None:
+            _narrow_fov(verified, verify_horizons_at, params.horizon_fov_step)
+        # a wrong focal length scales the skyline's azimuths: the best fits pick the fov
+        for fov_i in sorted(verified, key=lambda f: _best_of(verified[f][2]))[: 1 if fov is not None else 2]:
+            f_px, poses, score, trusted = verified[fov_i]
+            _add_candidates(candidates, poses, score, trusted, f_px, None, params)
     accepted, stop_after = None, len(hyps)
     for start in range(0, len(hyps), params.chunk):
         if start >= stop_after:
@@ -307,6 +321,21 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
         lonlat = (float(lon), float(lat))
     return LocalizationResult("localized", r.pose, k_best.fov, confidence, time.perf_counter() - t_start,
                               stats.evaluated, stats, k_best, sky, rendered, model.dem.crs, lonlat)
+
+
+def _best_of(score: np.ndarray) -> float:
+    return float(score.min()) if len(score) else np.inf
+
+
+def _narrow_fov(verified: dict, verify_at, steps: tuple[float, ...]) -> None:
+    """Unknown fov: bisect around the best-fitting fov so far (by the far-horizon poses'
+    best verification score), one probe on each side per step (deg)."""
+    lo, hi = min(verified), max(verified)
+    for step in steps:
+        best = min(verified, key=lambda f: _best_of(verified[f][2]))
+        for f in (best - step, best + step):
+            if lo <= f <= hi and f not in verified:
+                verify_at(f)
 
 
 def _add_candidates(candidates: list[_Candidate], poses: np.ndarray, score: np.ndarray, trusted: np.ndarray,
