@@ -1,14 +1,17 @@
 """Stages 3–4 put together: photo skyline -> hypotheses -> poses -> constraints ->
 verification -> refinement -> a pose with a confidence, or an abstention.
 
-Hypotheses are taken most probable first in chunks (at most ``max_hypotheses``);
-after each chunk the best verified candidate by each of the two verification
-scores (plain, and far skyline only) is refined. Once a refined pose
-scores ``accept_score_px`` and agrees with the photo's skyline on
-``accept_agreement`` of its columns, ``confirm_chunks`` more chunks are tried
-(a pose tens to hundreds of metres off can fit a far foreground almost as well)
-and the best refined pose wins; its confidence falls when a distinct refined
-pose fits nearly as well.
+Two sources of candidates: poses from the model's far horizons
+(:mod:`.horizon_search`, verified first) and three-point hypotheses, taken most
+probable first in chunks (at most ``max_hypotheses``). After each chunk the best
+unrefined candidate of each source by each of the two verification scores
+(plain, and far skyline only) is refined; the sources are de-duplicated and
+budgeted apart. Once a refined pose scores ``accept_score_px`` and agrees with
+the photo's skyline on ``accept_agreement`` of its columns, ``confirm_chunks``
+more chunks are tried (a pose tens to hundreds of metres off can fit a far
+foreground almost as well) and the best refined pose wins; its confidence falls
+when a distinct refined pose fits nearly as well. With the fov unknown, the
+far-horizon search also picks the focal lengths worth refining.
 """
 
 from __future__ import annotations
