@@ -26,7 +26,9 @@ from .sky import pixel_features, sky_probability
 class SkylineParams:
     jump_cost: float = 0.25  # per pixel of boundary jump between columns
     jump_cap: float = 12.0  # no jump costs more than this (vertical edges)
-    edge_bonus: float = 24.0  # weight of the colour edge at the boundary
+    edge_bonus: float = 16.0  # weight of the colour edge at the boundary
+    edge_percentile: float = 97.0  # edges this strong or stronger count fully (1.0)
+    components: int = 5  # Gaussian components per class in the colour-texture mixtures
     rounds: int = 3  # boundary estimate -> re-fit colour models -> boundary
     band: int = 6  # pixels either side of the boundary left out of re-fitting
     texture_weight: float = 0.3  # textured pixels are unlikely sky
@@ -75,8 +77,14 @@ def boundary_dp(cost: np.ndarray, jump_cost: float, jump_cap: float) -> np.ndarr
     return path
 
 
-def _edge_strength(features: np.ndarray) -> np.ndarray:
-    """(H+1, W) colour-edge strength between rows b-1 and b, in [0, 1]."""
+def _edge_strength(features: np.ndarray, percentile: float = 97.0) -> np.ndarray:
+    """(H+1, W) colour-edge strength between rows b-1 and b, in [0, 1].
+
+    Lab distance of the two rows above from the two rows below, divided by its
+    ``percentile`` over the image: a moderate scale (rather than the very strongest
+    edges') keeps a faint snow/sky boundary worth almost as much as a hard
+    snow/rock edge further down, which would otherwise pull the boundary below it.
+    """
     lab = features[..., :3].astype(np.float64)
     H = lab.shape[0]
     pad = np.pad(lab, ((2, 2), (0, 0), (0, 0)), mode="edge")
@@ -84,7 +92,7 @@ def _edge_strength(features: np.ndarray) -> np.ndarray:
     below = 0.5 * (pad[2 : H + 3] + pad[3 : H + 4])  # rows b, b+1
     e = np.linalg.norm(above - below, axis=2)
     e[0] = e[-1] = 0.0
-    scale = max(np.percentile(e, 99.5), 1.0)
+    scale = max(np.percentile(e, percentile), 1.0)
     return np.clip(e / scale, 0, 1)
 
 
@@ -147,13 +155,13 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
     H, W = image.shape[:2]
     features = pixel_features(image)
     prior = _row_prior(H)
-    edges = _edge_strength(features)
+    edges = _edge_strength(features, params.edge_percentile)
     texture = np.clip(features[..., 4] / max(float(np.percentile(features[..., 4], 90)), 1e-3), 0, 1)
     v = np.arange(H)[:, None]
     sky_mask, terrain_mask = initial_seeds(features)
     rows = None
     for round_ in range(params.rounds):
-        p = sky_probability(features, sky_mask, terrain_mask, prior, seed=round_)
+        p = sky_probability(features, sky_mask, terrain_mask, prior, components=params.components, seed=round_)
         sky_cost = (1.0 - p) + params.texture_weight * texture  # what labelling a pixel sky costs
         unary = np.vstack([np.zeros((1, W)), np.cumsum(sky_cost - p, axis=0)])
         rows = boundary_dp(unary - params.edge_bonus * edges, params.jump_cost, params.jump_cap)
