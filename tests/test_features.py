@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import cv2
@@ -25,6 +26,16 @@ def test_skyline_of_a_rendered_photo_matches_its_truth(look, tujunga_terrain, tu
     assert np.median(e) < 1.0
     assert np.mean(e <= 3) >= 0.95
     assert found.confidence.shape == (K.width,) and ((found.confidence >= 0) & (found.confidence <= 1)).all()
+
+
+def test_a_near_slope_reaching_the_top_of_the_frame_is_not_taken_for_sky(tujunga_terrain, tujunga_view):
+    pose, K = tujunga_view
+    pose = dataclasses.replace(pose, pan=280.0)  # facing the valley side
+    photo = render_photo(tujunga_terrain, pose, K, Look(seed=1))
+    assert np.mean(photo.sky_boundary <= 0.5) > 0.1  # terrain fills the top of some columns
+    e = column_errors(extract_skyline(photo.image).skyline, photo.sky_boundary)
+    assert np.median(e) < 1.0  # the smooth slope touching the top edge once became sky: 120+ px
+    assert np.mean(e <= 5) >= 0.7
 
 
 def test_foreground_occluders_are_part_of_the_extracted_skyline(tujunga_terrain, tujunga_view):

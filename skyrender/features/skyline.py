@@ -104,11 +104,16 @@ def _row_prior(H: int) -> np.ndarray:
 
 def _subpixel(features: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """Refine integer boundaries: the sky coverage of the pixels around each boundary,
-    measured along the colour axis from terrain to sky, sums to the boundary offset."""
+    measured along the colour axis from terrain to sky, sums to the boundary offset.
+
+    The window is 3 rows either side and the refinement may move a boundary by up to
+    2 rows: a strong edge saturates the edge term over two neighbouring rows, so the
+    integer boundary can sit one row off the colour transition.
+    """
     lab = features[..., :3].astype(np.float64)
     H, W = lab.shape[:2]
     cols = np.arange(W)
-    k = 2
+    k = 3
 
     def rows_mean(offsets):
         r = np.clip(rows[None, :] + np.array(offsets)[:, None], 0, H - 1)
@@ -125,26 +130,46 @@ def _subpixel(features: np.ndarray, rows: np.ndarray) -> np.ndarray:
     refined = rows - k + coverage
     contrast = np.sqrt(norm2)
     ok = (rows > k) & (rows < H - k) & (contrast > 2.0)
-    return np.where(ok, np.clip(refined, rows - 1.0, rows + 1.0), rows.astype(np.float64)), contrast
+    return np.where(ok, np.clip(refined, rows - 2.0, rows + 2.0), rows.astype(np.float64)), contrast
+
+
+def _top_components(features: np.ndarray, labels: np.ndarray, max_lab_distance: float = 15.0):
+    """Labels of the smooth components that touch the top edge: (sky-like, others).
+
+    A near slope reaching the top of the frame is smooth and touches the top edge too:
+    only the component that covers most of the top row, and others of a similar mean
+    Lab colour (within ``max_lab_distance``), are taken for sky; the others are terrain.
+    """
+    top, counts = np.unique(labels[0][labels[0] > 0], return_counts=True)
+    if len(top) <= 1:
+        return top, top[:0]
+    from scipy import ndimage
+
+    lab = features[..., :3]
+    means = np.stack([ndimage.mean(lab[..., c], labels, top) for c in range(3)], axis=1)
+    sky_like = np.linalg.norm(means - means[np.argmax(counts)], axis=1) <= max_lab_distance
+    return top[sky_like], top[~sky_like]
 
 
 def initial_seeds(features: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """First-round training pixels: sky = the smooth region connected to the top edge
     (sky is the smoothest thing that touches the top of a landscape photo); terrain =
-    the textured pixels and the bottom fifth of the frame, below every sky seed."""
+    the textured pixels, smooth slopes of another colour touching the top, and the
+    bottom fifth of the frame, below every sky seed."""
     from scipy import ndimage
 
     H, W = features.shape[:2]
     grad = ndimage.uniform_filter(features[..., 4], 5)
     smooth = grad < max(0.6, float(np.percentile(grad, 35)))
     labels, _ = ndimage.label(smooth)
-    top = np.unique(labels[0][labels[0] > 0])
-    sky = np.isin(labels, top) & smooth
+    sky_labels, slope_labels = _top_components(features, labels)
+    sky = np.isin(labels, sky_labels) & smooth
+    slope = ndimage.binary_erosion(np.isin(labels, slope_labels) & smooth, iterations=3)
     sky = ndimage.binary_erosion(sky, iterations=3)
     v = np.arange(H)[:, None]
     lowest_sky = np.where(sky.any(axis=0), H - 1 - np.argmax(sky[::-1], axis=0), -1)
     textured = grad > np.percentile(grad, 60)
-    terrain = ((v >= int(0.8 * H)) | textured) & (v > lowest_sky[None, :] + 3)
+    terrain = ((v >= int(0.8 * H)) | textured | slope) & (v > lowest_sky[None, :] + 3)
     if sky.sum() < 0.01 * H * W:  # nothing smooth at the top: fall back to the top rows
         sky = np.broadcast_to(v < max(2, int(0.1 * H)), (H, W)).copy()
     return sky, terrain
