@@ -56,7 +56,7 @@ def blue_sky_logit(features: np.ndarray, weight: float = 12.0) -> np.ndarray:
 
 
 def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np.ndarray,
-                    row_prior: np.ndarray, *, components: int = 3, max_samples: int = 20_000, row_weight: float = 20.0,
+                    row_prior: np.ndarray, *, components: int = 5, max_samples: int = 12_000, row_weight: float = 20.0,
                     seed: int = 0) -> np.ndarray:
     """(H, W) P(sky) from colour-texture mixtures fitted to the given sky / terrain pixels.
 

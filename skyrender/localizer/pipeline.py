@@ -42,6 +42,7 @@ FOV_CANDIDATES = (30.0, 40.0, 50.0, 60.0, 70.0)
 class LocalizeParams:
     n_peaks: int = 8  # image peaks taken (the paper's top N)
     max_peak_aspect: float = 1.5  # steeper skyline peaks are trees or posts in front, not mountains
+    peak_smooth_px: float = 3.0  # skyline smoothing before peak finding (2 px let sub-pixel changes reorder the peaks)
     residual_px: float = 2.0  # reprojection cut-off of the three-point fit
     limit_tol_px: float = 5.0  # "skyline is the limit" tolerance (plus f * 150 m / distance)
     chunk: int = 50_000  # hypotheses solved per batch
@@ -196,7 +197,7 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     sky, weights, W, H = _image_skyline(image, skyline)
     fovs = (float(fov),) if fov is not None else FOV_CANDIDATES
     intrinsics = Intrinsics.from_fov(fovs[0], W, H)
-    peaks = skyline_peaks(sky, n=params.n_peaks, max_aspect=params.max_peak_aspect)
+    peaks = skyline_peaks(sky, n=params.n_peaks, smooth_px=params.peak_smooth_px, max_aspect=params.max_peak_aspect)
     stats.add_time("image_features", time.perf_counter() - tick)
     tick = time.perf_counter()
     terrain = terrain if terrain is not None else Terrain(model.dem, curvature=curvature)
