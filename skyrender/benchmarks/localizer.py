@@ -67,7 +67,8 @@ def loop_solve(dem, uv: np.ndarray, world: np.ndarray, height: float, intr: Intr
 def solver_benchmark(terrain, model, intr, pose, n_loop: int = 300) -> dict:
     """Hypotheses/s of the vectorised solver and of the loop, on one view's hypotheses."""
     sky = render_skylines(terrain, pose, intr)
-    peaks = skyline_peaks(sky, n=LocalizeParams().n_peaks, smooth_px=LocalizeParams().peak_smooth_px)
+    params = LocalizeParams()
+    peaks = skyline_peaks(sky, n=params.n_peaks, smooth_px=params.peak_smooth_px)
     uv = np.array([[p.u, p.v] for p in peaks])
     hyps = generate_hypotheses(uv[:, 0], np.array([p.size for p in peaks]), model)
     n = min(len(hyps), 400_000)

@@ -77,7 +77,7 @@ def boundary_dp(cost: np.ndarray, jump_cost: float, jump_cap: float) -> np.ndarr
     return path
 
 
-def _edge_strength(features: np.ndarray, percentile: float = 97.0) -> np.ndarray:
+def _edge_strength(features: np.ndarray, percentile: float) -> np.ndarray:
     """(H+1, W) colour-edge strength between rows b-1 and b, in [0, 1].
 
     Lab distance of the two rows above from the two rows below, divided by its
