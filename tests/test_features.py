@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import os
 
 import cv2
 import numpy as np
 import pytest
 
-from skyrender.benchmarks.skyline_photos import column_errors, otsu_baseline, truth_from_red_line
+from skyrender.benchmarks.skyline_photos import column_errors, otsu_baseline, truth_from_mask, truth_from_red_line
 from skyrender.cli import main
 from skyrender.features import as_rgb8, extract_skyline, load_photo, skyline_peaks
+from skyrender.features.sky import clear_sky_field, shadowed_snow_logit
 from skyrender.render.photo import Look, render_photo
 
 from .conftest import data_path
@@ -56,6 +58,33 @@ def test_real_photo_skyline_meets_the_targets(name):
     e = column_errors(extract_skyline(photo).skyline, truth)
     assert np.median(e) <= 2.0
     assert np.mean(e <= 5) >= 0.95
+
+
+def test_a_snow_face_in_shadow_below_a_clear_sky_is_not_taken_for_sky():
+    # weisshorn, columns 365-405: a blue shadowed snow face just below the ridge, as smooth
+    # and blue as the sky but ~10 L units darker than it (the extractor once ended 41 px low)
+    folder = data_path("photos", "geopose3k", "weisshorn")
+    photo = load_photo(os.path.join(folder, "original.png"))
+    truth = truth_from_mask(cv2.imread(os.path.join(folder, "mask.png"), cv2.IMREAD_GRAYSCALE))
+    e = column_errors(extract_skyline(photo).skyline, truth)
+    assert np.mean(e[365:405] <= 5) >= 0.9
+
+
+def test_clear_sky_field_fits_a_smooth_sky_and_ignores_clouds():
+    H, W = 120, 160
+    v, u = np.mgrid[0:H, 0:W]
+    x, y = (u + 0.5) / W - 0.5, (v + 0.5) / H - 0.5
+    lab = np.dstack([60 + 8 * y + 3 * x * x, -2 + 2 * x, -35 + 10 * y * y]).astype(np.float32)
+    rng = np.random.default_rng(0)
+    noisy = lab + rng.normal(0, 0.5, lab.shape).astype(np.float32)
+    noisy[20:40, 30:70] = [92.0, 0.0, -4.0]  # a white cloud, 4 % of the sky
+    features = np.dstack([noisy, np.zeros((H, W, 2), np.float32)])
+    field, sigma = clear_sky_field(features, np.ones((H, W), bool))
+    assert np.max(np.abs(field - lab)) < 0.5
+    assert 0.3 < sigma < 1.5
+    shadow = np.dstack([lab - [10.0, 0.0, 0.0], np.zeros((H, W, 2))]).astype(np.float32)
+    assert shadowed_snow_logit(shadow, field, sigma).min() > 5  # 10 L units darker than the sky
+    assert shadowed_snow_logit(features, field, sigma).max() == 0.0  # the sky and its cloud
 
 
 def test_extractor_beats_the_otsu_baseline_on_a_hazy_photo():

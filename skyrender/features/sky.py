@@ -8,6 +8,11 @@ probability combines a prior on the row with colour-texture models learned
 labelled sky and terrain by the previous boundary estimate (the first round
 seeds them from the top and bottom of the frame). Self-training adapts to
 what a fixed classifier cannot know: this photo's sky, haze and snow.
+
+Two physical cues are added to the mixtures' evidence: smooth blue pixels
+are likely sky (blue gaps between clouds), unless they are clearly darker
+than the smooth clear-sky colour field at their position (snow faces in
+shadow are blue too, but darker than the sky beside them).
 """
 
 from __future__ import annotations
@@ -55,6 +60,54 @@ def blue_sky_logit(features: np.ndarray, weight: float = 12.0) -> np.ndarray:
     return weight * blue * smooth
 
 
+def _quadratic_design(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """(N, 6) terms 1, u, v, u^2, uv, v^2 of coordinates already scaled to about [-0.5, 0.5]."""
+    return np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=-1)
+
+
+def clear_sky_field(features: np.ndarray, sky_mask: np.ndarray, *, max_samples: int = 20_000,
+                    seed: int = 0) -> tuple[np.ndarray, float] | None:
+    """Smooth Lab colour field of the sky, fitted to the ``sky_mask`` pixels.
+
+    A quadratic in the pixel coordinates per Lab channel, fitted by least squares
+    with outliers (clouds, mislabelled terrain: beyond 3 robust sigma) dropped
+    twice. Returns ((H, W, 3) field, robust residual sigma in Lab units), or None
+    with fewer than 50 sky pixels. A clear sky is such a field to about 1 Lab unit.
+    """
+    H, W = features.shape[:2]
+    idx = np.flatnonzero(sky_mask.ravel())
+    if len(idx) < 50:
+        return None
+    if len(idx) > max_samples:
+        idx = np.random.default_rng(seed).choice(idx, max_samples, replace=False)
+    v, u = np.divmod(idx, W)
+    design = _quadratic_design((u + 0.5) / W - 0.5, (v + 0.5) / H - 0.5)
+    lab = features[..., :3].reshape(-1, 3)[idx].astype(np.float64)
+    keep = np.ones(len(idx), dtype=bool)
+    for _ in range(3):
+        coef = np.linalg.lstsq(design[keep], lab[keep], rcond=None)[0]
+        residual = np.linalg.norm(lab - design @ coef, axis=1)
+        sigma = 1.4826 * float(np.median(residual[keep]))
+        keep = residual <= max(3.0 * sigma, 2.0)
+    vv, uu = np.mgrid[0:H, 0:W]
+    field = _quadratic_design((uu.ravel() + 0.5) / W - 0.5, (vv.ravel() + 0.5) / H - 0.5) @ coef
+    return field.reshape(H, W, 3).astype(np.float32), sigma
+
+
+def shadowed_snow_logit(features: np.ndarray, field: np.ndarray, sigma: float, weight: float = 20.0) -> np.ndarray:
+    """(H, W) log-odds penalty for pixels darker than the clear-sky field at their position.
+
+    Counts where the field itself is blue (b* below -10, fully below -20): in a clear
+    blue sky nothing is more than max(4, 3 sigma) Lab L units darker than the sky around
+    it, but a snow face in shadow is, while it is as blue and smooth as sky. Under a
+    cloudy sky the field is grey and the blue gaps are darker than it: no penalty there.
+    """
+    darker = field[..., 0] - features[..., 0]
+    threshold = max(4.0, 3.0 * sigma)
+    blue_field = np.clip((-field[..., 2] - 10.0) / 10.0, 0, 1)
+    return weight * blue_field * np.clip((darker - threshold) / 6.0, 0, 1)
+
+
 def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np.ndarray,
                     row_prior: np.ndarray, *, components: int = 5, max_samples: int = 12_000, row_weight: float = 20.0,
                     seed: int = 0) -> np.ndarray:
@@ -83,4 +136,7 @@ def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np
     prior = np.clip(np.repeat(row_prior, W), 1e-3, 1 - 1e-3)
     # the mixtures' evidence saturates at +-10 so that the row and blue-sky priors still count
     logit = np.clip(ll_sky - ll_ter, -10, 10) + np.log(prior / (1 - prior)) + blue_sky_logit(features).ravel()
+    sky_field = clear_sky_field(features, sky_mask, seed=seed)
+    if sky_field is not None:
+        logit -= shadowed_snow_logit(features, *sky_field).ravel()
     return (1.0 / (1.0 + np.exp(-logit))).reshape(H, W).astype(np.float32)
