@@ -26,9 +26,10 @@ from scipy.optimize import least_squares
 
 from ..camera import CURVATURE_COEFF, Intrinsics, Pose, project
 from ..dem.synthetic import fractal_terrain
-from ..features import extract_skyline, skyline_peaks
+from ..features import extract_skyline
 from ..localizer import LocalizeParams, localize
 from ..localizer.hypotheses import generate_hypotheses
+from ..localizer.pipeline import image_peaks
 from ..localizer.pose_solver import (_world_directions, angles_from_rotations, image_bearings, resection_2d,
                                      rotations_from_bearings, solve_poses)
 from ..model import build_model
@@ -67,8 +68,7 @@ def loop_solve(dem, uv: np.ndarray, world: np.ndarray, height: float, intr: Intr
 def solver_benchmark(terrain, model, intr, pose, n_loop: int = 300) -> dict:
     """Hypotheses/s of the vectorised solver and of the loop, on one view's hypotheses."""
     sky = render_skylines(terrain, pose, intr)
-    params = LocalizeParams()
-    peaks = skyline_peaks(sky, n=params.n_peaks, smooth_px=params.peak_smooth_px)
+    peaks = image_peaks(sky, LocalizeParams())
     uv = np.array([[p.u, p.v] for p in peaks])
     hyps = generate_hypotheses(uv[:, 0], np.array([p.size for p in peaks]), model)
     n = min(len(hyps), 400_000)

@@ -61,7 +61,9 @@ def blue_sky_logit(features: np.ndarray, weight: float = 12.0) -> np.ndarray:
 
 
 def _quadratic_design(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """(N, 6) terms 1, u, v, u^2, uv, v^2 of coordinates already scaled to about [-0.5, 0.5]."""
+    """(..., 6) terms 1, u, v, u^2, uv, v^2 of coordinates already scaled to about [-0.5, 0.5]
+    (u and v broadcast against each other: a column and a row give the whole grid)."""
+    u, v = np.broadcast_arrays(u, v)
     return np.stack([np.ones_like(u), u, v, u * u, u * v, v * v], axis=-1)
 
 
@@ -89,9 +91,8 @@ def clear_sky_field(features: np.ndarray, sky_mask: np.ndarray, *, max_samples: 
         residual = np.linalg.norm(lab - design @ coef, axis=1)
         sigma = 1.4826 * float(np.median(residual[keep]))
         keep = residual <= max(3.0 * sigma, 2.0)
-    vv, uu = np.mgrid[0:H, 0:W]
-    field = _quadratic_design((uu.ravel() + 0.5) / W - 0.5, (vv.ravel() + 0.5) / H - 0.5) @ coef
-    return field.reshape(H, W, 3).astype(np.float32), sigma
+    field = _quadratic_design((np.arange(W) + 0.5) / W - 0.5, (np.arange(H)[:, None] + 0.5) / H - 0.5) @ coef
+    return field.astype(np.float32), sigma
 
 
 def shadowed_snow_logit(features: np.ndarray, field: np.ndarray, sigma: float, weight: float = 20.0) -> np.ndarray:

@@ -149,6 +149,12 @@ def _image_skyline(image, skyline) -> tuple[np.ndarray, np.ndarray, int, int]:
     return sky, np.ones(W), W, H
 
 
+def image_peaks(sky: np.ndarray, params: LocalizeParams) -> list:
+    """The skyline peaks that generate hypotheses: the ``n_peaks`` largest on a
+    ``peak_smooth_px`` smoothed skyline, steep foreground bumps left out."""
+    return skyline_peaks(sky, n=params.n_peaks, smooth_px=params.peak_smooth_px, max_aspect=params.max_peak_aspect)
+
+
 def _distinct(poses: list[np.ndarray], pose: np.ndarray, same_m: float) -> bool:
     """True when ``pose`` is farther than ``same_m`` (m) or 3 deg of pan from each of ``poses``."""
     for other in poses:
@@ -197,7 +203,7 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     sky, weights, W, H = _image_skyline(image, skyline)
     fovs = (float(fov),) if fov is not None else FOV_CANDIDATES
     intrinsics = Intrinsics.from_fov(fovs[0], W, H)
-    peaks = skyline_peaks(sky, n=params.n_peaks, smooth_px=params.peak_smooth_px, max_aspect=params.max_peak_aspect)
+    peaks = image_peaks(sky, params)
     stats.add_time("image_features", time.perf_counter() - tick)
     tick = time.perf_counter()
     terrain = terrain if terrain is not None else Terrain(model.dem, curvature=curvature)
