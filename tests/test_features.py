@@ -13,7 +13,7 @@ import pytest
 from skyrender.benchmarks.skyline_photos import column_errors, otsu_baseline, truth_from_mask, truth_from_red_line
 from skyrender.cli import main
 from skyrender.features import as_rgb8, extract_skyline, load_photo, skyline_peaks
-from skyrender.features.sky import clear_sky_field, shadowed_snow_logit
+from skyrender.features.sky import clear_sky_field, hazy_ridge_logit, shadowed_snow_logit
 from skyrender.render.photo import Look, render_photo
 
 from .conftest import data_path
@@ -60,14 +60,25 @@ def test_real_photo_skyline_meets_the_targets(name):
     assert np.mean(e <= 5) >= 0.95
 
 
-def test_a_snow_face_in_shadow_below_a_clear_sky_is_not_taken_for_sky():
-    # weisshorn, columns 365-405: a blue shadowed snow face just below the ridge, as smooth
-    # and blue as the sky but ~10 L units darker than it (the extractor once ended 41 px low)
+@pytest.fixture(scope="module")
+def weisshorn_errors():
+    """|column error| of the extracted skyline on the GeoPose3K weisshorn photo (clear blue sky)."""
     folder = data_path("photos", "geopose3k", "weisshorn")
     photo = load_photo(os.path.join(folder, "original.png"))
     truth = truth_from_mask(cv2.imread(os.path.join(folder, "mask.png"), cv2.IMREAD_GRAYSCALE))
-    e = column_errors(extract_skyline(photo).skyline, truth)
-    assert np.mean(e[365:405] <= 5) >= 0.9
+    return column_errors(extract_skyline(photo).skyline, truth)
+
+
+def test_a_snow_face_in_shadow_below_a_clear_sky_is_not_taken_for_sky(weisshorn_errors):
+    # columns 365-405: a blue shadowed snow face just below the ridge, as smooth and blue
+    # as the sky but ~10 L units darker than it (the extractor once ended 41 px low)
+    assert np.mean(weisshorn_errors[365:405] <= 5) >= 0.9
+
+
+def test_a_hazy_snow_ridge_as_light_as_the_sky_is_not_taken_for_sky(weisshorn_errors):
+    # columns 550-566: a distant ridge seen through haze, the sky's lightness but ~12 b*
+    # units less blue (the extractor once ended 18-27 px low, inside the ridge)
+    assert np.mean(weisshorn_errors[550:566] <= 5) >= 0.9
 
 
 def test_clear_sky_field_fits_a_smooth_sky_and_ignores_clouds():
@@ -85,6 +96,9 @@ def test_clear_sky_field_fits_a_smooth_sky_and_ignores_clouds():
     shadow = np.dstack([lab - [10.0, 0.0, 0.0], np.zeros((H, W, 2))]).astype(np.float32)
     assert shadowed_snow_logit(shadow, field, sigma).min() > 5  # 10 L units darker than the sky
     assert shadowed_snow_logit(features, field, sigma).max() == 0.0  # the sky and its cloud
+    hazy = np.dstack([lab + [-1.0, 0.0, 14.0], np.zeros((H, W, 2))]).astype(np.float32)
+    assert hazy_ridge_logit(hazy, field, sigma).min() > 5  # as light as the sky, 14 b* units greyer
+    assert hazy_ridge_logit(features, field, sigma).max() == 0.0  # the cloud is greyer but brighter
 
 
 def test_extractor_beats_the_otsu_baseline_on_a_hazy_photo():

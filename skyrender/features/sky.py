@@ -109,6 +109,22 @@ def shadowed_snow_logit(features: np.ndarray, field: np.ndarray, sigma: float, w
     return weight * blue_field * np.clip((darker - threshold) / 6.0, 0, 1)
 
 
+def hazy_ridge_logit(features: np.ndarray, field: np.ndarray, sigma: float, weight: float = 20.0) -> np.ndarray:
+    """(H, W) log-odds penalty for pixels greyer than a blue clear-sky field, yet no brighter.
+
+    A distant snow ridge seen through haze has the sky's lightness but is markedly
+    less blue (weisshorn: sky L 62, b* -35; the ridge L 60, b* -22). Pixels more than
+    max(8, 3 sigma) b* units less blue than the field are penalised, unless they are
+    over 4 L units brighter than it: clouds are that, and clouds are sky. Counts only
+    where the field itself is blue, as :func:`shadowed_snow_logit` does.
+    """
+    greyer = features[..., 2] - field[..., 2]
+    brighter = features[..., 0] - field[..., 0]
+    threshold = max(8.0, 3.0 * sigma)
+    blue_field = np.clip((-field[..., 2] - 10.0) / 10.0, 0, 1)
+    return weight * blue_field * np.clip((greyer - threshold) / 6.0, 0, 1) * np.clip((4.0 - brighter) / 4.0, 0, 1)
+
+
 def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np.ndarray,
                     row_prior: np.ndarray, *, components: int = 5, max_samples: int = 12_000, row_weight: float = 20.0,
                     seed: int = 0) -> np.ndarray:
@@ -139,5 +155,5 @@ def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np
     logit = np.clip(ll_sky - ll_ter, -10, 10) + np.log(prior / (1 - prior)) + blue_sky_logit(features).ravel()
     sky_field = clear_sky_field(features, sky_mask, seed=seed)
     if sky_field is not None:
-        logit -= shadowed_snow_logit(features, *sky_field).ravel()
+        logit -= (shadowed_snow_logit(features, *sky_field) + hazy_ridge_logit(features, *sky_field)).ravel()
     return (1.0 / (1.0 + np.exp(-logit))).reshape(H, W).astype(np.float32)
