@@ -10,7 +10,8 @@ import cv2
 import numpy as np
 import pytest
 
-from skyrender.benchmarks.skyline_photos import column_errors, otsu_baseline, truth_from_mask, truth_from_red_line
+from skyrender.benchmarks.skyline_photos import (column_errors, otsu_baseline, truth_from_mask, truth_from_red_line,
+                                                 truth_without_edge)
 from skyrender.cli import main
 from skyrender.features import as_rgb8, extract_skyline, load_photo, skyline_peaks
 from skyrender.features.sky import clear_sky_field, hazy_ridge_logit, shadowed_snow_logit
@@ -99,6 +100,23 @@ def test_clear_sky_field_fits_a_smooth_sky_and_ignores_clouds():
     hazy = np.dstack([lab + [-1.0, 0.0, 14.0], np.zeros((H, W, 2))]).astype(np.float32)
     assert hazy_ridge_logit(hazy, field, sigma).min() > 5  # as light as the sky, 14 b* units greyer
     assert hazy_ridge_logit(features, field, sigma).max() == 0.0  # the cloud is greyer but brighter
+
+
+def test_truth_without_edge_flags_a_boundary_hidden_inside_a_cloud():
+    H, W = 80, 60
+    image = np.zeros((H, W, 3), np.uint8)
+    image[:40] = (70, 130, 210)  # blue sky above row 40, dark rock below
+    image[40:] = (60, 55, 50)
+    image[25:55, 30:] = 245  # a white cloud over the ridge in columns 30-59
+    truth = np.full(W, 40.0)
+    truth[:3] = np.nan
+    unseen = truth_without_edge(image, truth)
+    assert not unseen[:30].any()  # the sky/rock edge is at the truth
+    assert unseen[32:].all()  # uniform white cloud at rows 37-43: nothing to see
+    truth[30:] = 44.0  # deeper in the cloud, 11 px above its bottom edge: still nothing near it
+    assert truth_without_edge(image, truth)[32:].all()
+    truth[30:] = 54.0  # at the cloud's bottom edge (row 55, within 3 px): seen
+    assert not truth_without_edge(image, truth)[32:].any()
 
 
 def test_extractor_beats_the_otsu_baseline_on_a_hazy_photo():
