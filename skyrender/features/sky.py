@@ -9,10 +9,12 @@ labelled sky and terrain by the previous boundary estimate (the first round
 seeds them from the top and bottom of the frame). Self-training adapts to
 what a fixed classifier cannot know: this photo's sky, haze and snow.
 
-Two physical cues are added to the mixtures' evidence: smooth blue pixels
+Three physical cues are added to the mixtures' evidence: smooth blue pixels
 are likely sky (blue gaps between clouds), unless they are clearly darker
 than the smooth clear-sky colour field at their position (snow faces in
-shadow are blue too, but darker than the sky beside them).
+shadow are blue too, but darker than the sky beside them); and a pixel as
+light as a blue clear-sky field but clearly greyer is not sky (a distant
+ridge through haze; clouds are greyer too, but brighter).
 """
 
 from __future__ import annotations
