@@ -134,8 +134,39 @@ def test_peaks_of_gaussian_bumps_are_found_within_a_pixel():
     peaks = skyline_peaks(sky, n=6)
     assert [round(p.u) for p in peaks] == [400, 100, 251, 531]  # ordered by size (area)
     for p in peaks:
-        c, a, _ = min(bumps, key=lambda b: abs(b[0] - p.u))
+        c, a, s = min(bumps, key=lambda b: abs(b[0] - p.u))
         assert abs(p.u - c) < 1.0 and abs(p.v - (300 - a)) < 1.0
+        # size: the bump's area a * s * sqrt(2 pi), less what the 2 px smoothing spreads out
+        assert abs(p.size / (a * s * np.sqrt(2 * np.pi)) - 1) < 0.05
+
+
+def test_peak_order_is_stable_under_sub_pixel_noise():
+    # bumps of areas 1193, 978 and 802 px^2 on a skyline with 1 px wiggles: the wiggles and
+    # 0.3 px noise move the second-derivative zero crossings, but not which bumps are largest
+    # (the area above the chord between those crossings ranked the 480 bump first)
+    rng = np.random.default_rng(1)
+    u = np.arange(640) + 0.5
+    bumps = [(120.0, 34, 14), (300.0, 26, 15), (480.0, 20, 16), (560.0, 8, 6)]
+    sky = 300 - sum(a * np.exp(-((u - c) ** 2) / (2 * s**2)) for c, a, s in bumps) + 1.0 * np.sin(u / 5.0)
+    reference = [round(p.u / 10) for p in skyline_peaks(sky, n=3, smooth_px=3.0)]
+    assert reference == [12, 30, 48]
+    for _ in range(20):
+        noisy = skyline_peaks(sky + rng.normal(0, 0.3, 640), n=3, smooth_px=3.0)
+        assert [round(p.u / 10) for p in noisy] == reference
+
+
+def test_a_post_in_front_neither_counts_as_a_peak_nor_takes_a_summit_prominence():
+    # a summit of area 1253 px^2 with a post (4 px wide, 60 px tall) rising beside it, and a
+    # smaller summit of 752 px^2: the post is left out as too steep, and the first summit,
+    # measured with the post cut out, stays the largest
+    u = np.arange(640) + 0.5
+    sky = 300 - 40 * np.exp(-((u - 200) ** 2) / (2 * 12.5**2)) - 30 * np.exp(-((u - 450) ** 2) / (2 * 10**2))
+    post = (u > 222) & (u < 226)
+    with_post = np.where(post, sky - 60, sky)
+    peaks = skyline_peaks(with_post, n=3, max_aspect=1.5)
+    assert [round(p.u) for p in peaks][:2] == [200, 450]
+    plain = skyline_peaks(sky, n=3, max_aspect=1.5)
+    assert abs(peaks[0].size / plain[0].size - 1) < 0.1
 
 
 def test_peaks_survive_noise_and_ignore_border_cutoffs():

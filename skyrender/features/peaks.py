@@ -4,22 +4,35 @@ The skyline is smoothed, split into intervals where its second derivative
 (of height, i.e. -v) is negative, and each interval is taken as one
 Gaussian-shaped bump: its apex is the highest point (u refined by a parabola
 through the three smoothed samples around it, v the highest raw sample within
-two columns, since smoothing flattens a sharp summit), its size the area between the curve and
-the chord joining the interval's ends. Intervals that touch the image border
+two columns, since smoothing flattens a sharp summit), its size the area of
+the Gaussian with the bump's prominence as height and its width at half
+prominence as full width at half maximum. Intervals that touch the image border
 or a gap (NaN) are cut-offs, not peaks, and are dropped.
+
+Why prominence rather than the area above the chord between the interval's
+ends: those ends are zero crossings of the second derivative, which sub-pixel
+noise moves, splits or merges, and the chord's area moved by 20-70 % with
+them; a prominence changes only as much as the skyline does. On ten rendered
+views, the top 8 peaks of the extracted skyline are those of the true one for
+97.5 % of peaks (88.7 % with the chord's area).
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
+from scipy.signal import peak_prominences, peak_widths
+
+GAUSSIAN_AREA_PER_FWHM = float(np.sqrt(np.pi / (4.0 * np.log(2.0))))  # area = this x height x FWHM
 
 
 @dataclass(frozen=True)
 class SkylinePeak:
-    """u, v: apex (px, image coordinates); size: area (px^2); width: interval length (px);
+    """u, v: apex (px, image coordinates); size: Gaussian area (px^2) from the prominence
+    and the width at half prominence; width: length of the negative-curvature interval (px);
     aspect: apex height over the interval's lower end, per half width (a conifer or a
     post in front is far steeper than a mountain: aspect > 1.5)."""
 
@@ -28,6 +41,37 @@ class SkylinePeak:
     size: float
     width: float
     aspect: float = 0.0
+
+
+def gaussian_size(height: np.ndarray, k: int) -> float:
+    """Area (px^2) of the Gaussian bump at sample ``k`` of a smoothed height profile (px):
+    its prominence times its width at half prominence, times sqrt(pi / (4 ln 2))."""
+    with warnings.catch_warnings():  # a flat top has no prominence: size 0, no warning
+        warnings.simplefilter("ignore", RuntimeWarning)  # scipy.signal PeakPropertyWarning
+        prominence, left, right = peak_prominences(height, [k])
+        if prominence[0] <= 0:
+            return 0.0
+        fwhm = peak_widths(height, [k], rel_height=0.5, prominence_data=(prominence, left, right))[0][0]
+    return GAUSSIAN_AREA_PER_FWHM * float(prominence[0]) * float(fwhm)
+
+
+def remove_steep_bumps(height: np.ndarray, intervals: list[tuple[int, int]], reach: float = 3.0) -> np.ndarray:
+    """Height profile with each bump of ``intervals`` (start, stop sample indices of its
+    negative-curvature interval) replaced by a straight line from valley to valley:
+    its flanks are followed down to the nearest local minimum on each side, at most
+    ``reach`` interval widths away."""
+    out = height.copy()
+    n = len(height)
+    for a, b in intervals:
+        limit = int(np.ceil(reach * (b - a)))
+        left, right = a, b - 1
+        while left > max(0, a - limit) and out[left - 1] <= out[left]:
+            left -= 1
+        while right < min(n - 1, b - 1 + limit) and out[right + 1] <= out[right]:
+            right += 1
+        if right > left:
+            out[left : right + 1] = np.linspace(out[left], out[right], right - left + 1)
+    return out
 
 
 def skyline_peaks(skyline: np.ndarray, n: int = 6, smooth_px: float = 2.0, min_size: float = 2.0,
@@ -43,32 +87,29 @@ def skyline_peaks(skyline: np.ndarray, n: int = 6, smooth_px: float = 2.0, min_s
         if stop - start < 5:
             continue
         h = -gaussian_filter1d(sky[start:stop], smooth_px, mode="nearest")
-        d2 = np.gradient(np.gradient(h))
-        concave = d2 < 0
-        runs = np.flatnonzero(np.diff(np.r_[0, concave.astype(int), 0]))
+        bumps = []  # (apex index, u offset, apex height, interval start, stop, aspect)
+        runs = np.flatnonzero(np.diff(np.r_[0, (np.gradient(np.gradient(h)) < 0).astype(int), 0]))
         for a, b in zip(runs[::2], runs[1::2]):
             if a == 0 or b == len(h):  # touches the border or a gap: a cut-off
                 continue
-            seg = h[a:b]
-            k = int(np.argmax(seg)) + a
+            k = int(np.argmax(h[a:b])) + a
             if k == a or k == b - 1:  # monotone interval: a shoulder, not a bump
                 continue
             y0, y1, y2 = h[k - 1], h[k], h[k + 1]
             denom = y0 - 2 * y1 + y2
-            offset = 0.5 * (y0 - y2) / denom if denom < 0 else 0.0
-            offset = float(np.clip(offset, -0.5, 0.5))
+            offset = float(np.clip(0.5 * (y0 - y2) / denom, -0.5, 0.5)) if denom < 0 else 0.0
             # the apex height from the unsmoothed skyline: smoothing flattens sharp summits
-            raw = sky[start + max(k - 2, 0) : start + min(k + 3, len(h))]
-            apex_h = float(-np.nanmin(raw))
-            x = np.arange(a, b)
-            chord = h[a] + (h[b - 1] - h[a]) * (x - a) / max(b - 1 - a, 1)
-            size = float(np.sum(np.clip(seg - chord, 0, None)))
-            if size < min_size:
-                continue
+            apex_h = float(-np.nanmin(sky[start + max(k - 2, 0) : start + min(k + 3, len(h))]))
             aspect = (apex_h - min(h[a], h[b - 1])) / max(0.5 * (b - a), 1.0)
+            bumps.append((k, offset, apex_h, a, b, aspect))
+        # foreground objects must not lend or take prominence: cut them out first
+        terrain_h = remove_steep_bumps(h, [(a, b) for _, _, _, a, b, asp in bumps if asp > max_aspect])
+        for k, offset, apex_h, a, b, aspect in bumps:
             if aspect > max_aspect:
                 continue
-            peaks.append(SkylinePeak(float(start + k + offset + 0.5), float(-apex_h), size, float(b - a),
-                                     float(aspect)))
+            size = gaussian_size(terrain_h, k)
+            if size >= min_size:
+                peaks.append(SkylinePeak(float(start + k + offset + 0.5), float(-apex_h), size, float(b - a),
+                                         float(aspect)))
     peaks.sort(key=lambda p: -p.size)
     return peaks[:n]
