@@ -7,14 +7,16 @@ through the three smoothed samples around it, v the highest raw sample within
 two columns, since smoothing flattens a sharp summit), its size the area of
 the Gaussian with the bump's prominence as height and its width at half
 prominence as full width at half maximum. Intervals that touch the image border
-or a gap (NaN) are cut-offs, not peaks, and are dropped.
+or a gap (NaN) are cut-offs, not peaks, and are dropped. Bumps steeper than
+``max_aspect`` (a post or a tree in front) are dropped too, and cut out of the
+profile before prominences are measured, so that they take none from a summit.
 
 Why prominence rather than the area above the chord between the interval's
 ends: those ends are zero crossings of the second derivative, which sub-pixel
 noise moves, splits or merges, and the chord's area moved by 20-70 % with
 them; a prominence changes only as much as the skyline does. On ten rendered
-views, the top 8 peaks of the extracted skyline are those of the true one for
-97.5 % of peaks (88.7 % with the chord's area).
+views, the top 8 peaks of the extracted skyline are among the true one's for
+95.0 % of peaks (85.0 % with the chord's area).
 """
 
 from __future__ import annotations
