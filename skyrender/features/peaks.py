@@ -45,16 +45,17 @@ class SkylinePeak:
     aspect: float = 0.0
 
 
-def gaussian_size(height: np.ndarray, k: int) -> float:
-    """Area (px^2) of the Gaussian bump at sample ``k`` of a smoothed height profile (px):
-    its prominence times its width at half prominence, times sqrt(pi / (4 ln 2))."""
+def gaussian_sizes(height: np.ndarray, apexes: np.ndarray) -> np.ndarray:
+    """Areas (px^2) of the Gaussian bumps at samples ``apexes`` of a smoothed height profile
+    (px): each one's prominence times its width at half prominence, times sqrt(pi / (4 ln 2))."""
+    apexes = np.asarray(apexes, dtype=np.intp)
+    if len(apexes) == 0:
+        return np.zeros(0)
     with warnings.catch_warnings():  # a flat top has no prominence: size 0, no warning
         warnings.simplefilter("ignore", RuntimeWarning)  # scipy.signal PeakPropertyWarning
-        prominence, left, right = peak_prominences(height, [k])
-        if prominence[0] <= 0:
-            return 0.0
-        fwhm = peak_widths(height, [k], rel_height=0.5, prominence_data=(prominence, left, right))[0][0]
-    return GAUSSIAN_AREA_PER_FWHM * float(prominence[0]) * float(fwhm)
+        prominence, left, right = peak_prominences(height, apexes)
+        fwhm = peak_widths(height, apexes, rel_height=0.5, prominence_data=(prominence, left, right))[0]
+    return np.where(prominence > 0, GAUSSIAN_AREA_PER_FWHM * prominence * fwhm, 0.0)
 
 
 def remove_steep_bumps(height: np.ndarray, intervals: list[tuple[int, int]], reach: float = 3.0) -> np.ndarray:
@@ -106,12 +107,11 @@ def skyline_peaks(skyline: np.ndarray, n: int = 6, smooth_px: float = 2.0, min_s
             bumps.append((k, offset, apex_h, a, b, aspect))
         # foreground objects must not lend or take prominence: cut them out first
         terrain_h = remove_steep_bumps(h, [(a, b) for _, _, _, a, b, asp in bumps if asp > max_aspect])
-        for k, offset, apex_h, a, b, aspect in bumps:
-            if aspect > max_aspect:
-                continue
-            size = gaussian_size(terrain_h, k)
+        kept = [bump for bump in bumps if bump[5] <= max_aspect]
+        sizes = gaussian_sizes(terrain_h, [k for k, *_ in kept])
+        for (k, offset, apex_h, a, b, aspect), size in zip(kept, sizes):
             if size >= min_size:
-                peaks.append(SkylinePeak(float(start + k + offset + 0.5), float(-apex_h), size, float(b - a),
+                peaks.append(SkylinePeak(float(start + k + offset + 0.5), float(-apex_h), float(size), float(b - a),
                                          float(aspect)))
     peaks.sort(key=lambda p: -p.size)
     return peaks[:n]

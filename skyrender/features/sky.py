@@ -97,6 +97,12 @@ def clear_sky_field(features: np.ndarray, sky_mask: np.ndarray, *, max_samples: 
     return field.astype(np.float32), sigma
 
 
+def blue_field_weight(field: np.ndarray) -> np.ndarray:
+    """(H, W) in [0, 1]: how blue the clear-sky field is (0 above b* -10, 1 below -20).
+    The clear-sky cues below count only where the sky itself is blue."""
+    return np.clip((-field[..., 2] - 10.0) / 10.0, 0, 1)
+
+
 def shadowed_snow_logit(features: np.ndarray, field: np.ndarray, sigma: float, weight: float = 20.0) -> np.ndarray:
     """(H, W) log-odds penalty for pixels darker than the clear-sky field at their position.
 
@@ -107,8 +113,7 @@ def shadowed_snow_logit(features: np.ndarray, field: np.ndarray, sigma: float, w
     """
     darker = field[..., 0] - features[..., 0]
     threshold = max(4.0, 3.0 * sigma)
-    blue_field = np.clip((-field[..., 2] - 10.0) / 10.0, 0, 1)
-    return weight * blue_field * np.clip((darker - threshold) / 6.0, 0, 1)
+    return weight * blue_field_weight(field) * np.clip((darker - threshold) / 6.0, 0, 1)
 
 
 def hazy_ridge_logit(features: np.ndarray, field: np.ndarray, sigma: float, weight: float = 20.0) -> np.ndarray:
@@ -123,8 +128,8 @@ def hazy_ridge_logit(features: np.ndarray, field: np.ndarray, sigma: float, weig
     greyer = features[..., 2] - field[..., 2]
     brighter = features[..., 0] - field[..., 0]
     threshold = max(8.0, 3.0 * sigma)
-    blue_field = np.clip((-field[..., 2] - 10.0) / 10.0, 0, 1)
-    return weight * blue_field * np.clip((greyer - threshold) / 6.0, 0, 1) * np.clip((4.0 - brighter) / 4.0, 0, 1)
+    no_brighter = np.clip((4.0 - brighter) / 4.0, 0, 1)
+    return weight * blue_field_weight(field) * np.clip((greyer - threshold) / 6.0, 0, 1) * no_brighter
 
 
 def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np.ndarray,
