@@ -1,13 +1,22 @@
 """Stage 2a — skyline extraction from a photograph (``skyrender skyline``).
 
-1. Per-pixel sky probability (:mod:`.sky`): colour-texture models of this
-   photo's sky and terrain, re-fitted from each boundary estimate.
+1. Per-pixel sky probability: by default (``method="net"``) from a small
+   fully convolutional network trained on real photos and renders
+   (:mod:`.sky_net`); the previous method (``method="gmm"``) fits colour-texture
+   mixtures to this photo's sky and terrain, re-fitted from each boundary
+   estimate (:mod:`.sky`).
 2. A global optimum over columns (dynamic programming): one boundary row
    per column minimising misclassified pixels, minus a bonus for a colour
    edge at the boundary, plus a truncated-linear penalty on jumps between
    neighbouring columns (poles and cliffs may jump, noise may not).
 3. Sub-pixel refinement from the colour profile across the boundary, and a
-   per-column confidence from its contrast and the probability margin.
+   per-column confidence: a logistic model of "within 5 px of the truth" on the
+   probability margin, the colour contrast and the boundary's roughness, fitted
+   on the training photos (``weights/sky_net_confidence.json``).
+
+Photos wider than :attr:`SkylineParams.work_width` (a 12-megapixel phone photo) are
+processed on a reduced copy; the boundary is then refined at full resolution in a
+band around it, and returned in full-image coordinates.
 
 Output per CONTRACT.md: v per column (u = i + 0.5); NaN where a column sees
 only sky; 0 where terrain reaches the top edge.
@@ -15,19 +24,30 @@ only sky; 0 where terrain reaches the top edge.
 
 from __future__ import annotations
 
+import json
+import os
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from .sky import pixel_features, sky_probability
+from .sky_net import sky_logits
+
+CONFIDENCE_MODEL = os.path.join(os.path.dirname(__file__), "weights", "sky_net_confidence.json")
 
 
 @dataclass(frozen=True)
 class SkylineParams:
+    method: str = "net"  # "net": learned sky probability; "gmm": per-photo colour mixtures
     jump_cost: float = 0.25  # per pixel of boundary jump between columns
     jump_cap: float = 12.0  # no jump costs more than this (vertical edges)
     edge_bonus: float = 16.0  # weight of the colour edge at the boundary
     edge_percentile: float = 97.0  # edges this strong or stronger count fully (1.0)
+    net_edge_bonus: float = 4.0  # edge weight with the network's probability (fitted on training photos)
+    net_jump_cost: float = 0.25  # jump cost with the network's probability (fitted on training photos)
+    net_jump_cap: float = 12.0
+    work_width: int = 1600  # wider photos are processed on a copy reduced to this width
     components: int = 5  # Gaussian components per class in the colour-texture mixtures
     rounds: int = 3  # boundary estimate -> re-fit colour models -> boundary
     band: int = 6  # pixels either side of the boundary left out of re-fitting
@@ -178,32 +198,146 @@ def initial_seeds(features: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) -> ExtractedSkyline:
     """The sky/terrain boundary of an RGB uint8 photo (see the module docstring)."""
     H, W = image.shape[:2]
+    if W > params.work_width:
+        return _extract_reduced(image, params)
     features = pixel_features(image)
-    prior = _row_prior(H)
-    edges = _edge_strength(features, params.edge_percentile)
-    texture = np.clip(features[..., 4] / max(float(np.percentile(features[..., 4], 90)), 1e-3), 0, 1)
-    v = np.arange(H)[:, None]
-    sky_mask, terrain_mask = initial_seeds(features)
-    rows = None
-    for round_ in range(params.rounds):
-        p = sky_probability(features, sky_mask, terrain_mask, prior, components=params.components, seed=round_)
-        sky_cost = (1.0 - p) + params.texture_weight * texture  # what labelling a pixel sky costs
-        unary = np.vstack([np.zeros((1, W)), np.cumsum(sky_cost - p, axis=0)])
-        rows = boundary_dp(unary - params.edge_bonus * edges, params.jump_cost, params.jump_cap)
-        sky_mask = v < rows[None, :] - params.band
-        terrain_mask = v >= rows[None, :] + params.band
+    if params.method == "gmm":
+        p = _gmm_probability(features, params)
+        rows = _boundary(features, p, params.edge_bonus, params.jump_cost, params.jump_cap, params.edge_percentile,
+                         params.texture_weight)
+    elif params.method == "net":
+        import cv2
+
+        logits = cv2.resize(sky_logits(image), (W, H), interpolation=cv2.INTER_LINEAR)
+        p = (1.0 / (1.0 + np.exp(-np.clip(logits, -30, 30)))).astype(np.float32)
+        rows = _boundary(features, p, params.net_edge_bonus, params.net_jump_cost, params.net_jump_cap,
+                         params.edge_percentile, 0.0)
+    else:
+        raise ValueError(f"unknown skyline method {params.method!r} (net or gmm)")
     sub, contrast = _subpixel(features, rows)
     skyline = np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub))
-    # confidence: probability margin either side of the boundary and colour contrast
+    return ExtractedSkyline(skyline, column_confidence(p, rows, contrast, skyline), p)
+
+
+def _gmm_probability(features: np.ndarray, params: SkylineParams) -> np.ndarray:
+    """P(sky) from colour-texture mixtures re-fitted to this photo (``method="gmm"``)."""
+    H, W = features.shape[:2]
+    prior = _row_prior(H)
+    v = np.arange(H)[:, None]
+    sky_mask, terrain_mask = initial_seeds(features)
+    for round_ in range(params.rounds):
+        p = sky_probability(features, sky_mask, terrain_mask, prior, components=params.components, seed=round_)
+        if round_ == params.rounds - 1:
+            break
+        rows = _boundary(features, p, params.edge_bonus, params.jump_cost, params.jump_cap, params.edge_percentile,
+                         params.texture_weight)
+        sky_mask = v < rows[None, :] - params.band
+        terrain_mask = v >= rows[None, :] + params.band
+    return p
+
+
+def _boundary(features: np.ndarray, p: np.ndarray, edge_bonus: float, jump_cost: float, jump_cap: float,
+              edge_percentile: float, texture_weight: float) -> np.ndarray:
+    """(W,) integer boundary row per column (H: all sky) minimising misclassified
+    probability mass minus the colour-edge bonus, with the jump penalty (:func:`boundary_dp`)."""
+    H, W = p.shape
+    sky_cost = 1.0 - p  # what labelling a pixel sky costs
+    if texture_weight:
+        grad = features[..., 4]
+        sky_cost = sky_cost + texture_weight * np.clip(grad / max(float(np.percentile(grad, 90)), 1e-3), 0, 1)
+    unary = np.vstack([np.zeros((1, W)), np.cumsum(sky_cost - p, axis=0)])
+    edges = _edge_strength(features, edge_percentile)
+    return boundary_dp(unary - edge_bonus * edges, jump_cost, jump_cap)
+
+
+def confidence_features(p: np.ndarray, rows: np.ndarray, contrast: np.ndarray, skyline: np.ndarray) -> np.ndarray:
+    """(W, 4) per-column cues of a trustworthy boundary: the probability margin (mean P(sky)
+    in 6 rows above minus 6 rows below), the colour contrast across it (Lab units / 15,
+    capped at 2), the boundary's roughness (|second difference| of v, px, capped at 20)
+    and the probability's own uncertainty at the boundary row (1 - |2p - 1|)."""
+    H, W = p.shape
+    cols = np.arange(W)
     csum = np.vstack([np.zeros((1, W)), np.cumsum(p, axis=0)])  # csum[k] = sum of p over rows < k
 
     def band_mean(start, stop, default):
         start, stop = np.clip(start, 0, H), np.clip(stop, 0, H)
-        cols = np.arange(W)
         total = csum[stop, cols] - csum[start, cols]
         return np.where(stop > start, total / np.maximum(stop - start, 1), default)
 
-    above = band_mean(rows - 6, rows - 1, 1.0)  # sky side of the boundary
-    below = band_mean(rows + 1, rows + 6, 0.0)  # terrain side
-    confidence = np.clip(above - below, 0, 1) * np.clip(contrast / 15.0, 0, 1)
-    return ExtractedSkyline(skyline, confidence, p)
+    margin = band_mean(rows - 6, rows - 1, 1.0) - band_mean(rows + 1, rows + 6, 0.0)
+    v = np.where(np.isfinite(skyline), skyline, H)
+    rough = np.abs(np.convolve(np.pad(v, 1, mode="edge"), [1.0, -2.0, 1.0], mode="valid"))
+    at = p[np.clip(rows, 0, H - 1), cols]
+    return np.column_stack([margin, np.minimum(contrast / 15.0, 2.0), np.minimum(rough, 20.0),
+                            1.0 - np.abs(2.0 * at - 1.0)])
+
+
+@lru_cache(maxsize=1)
+def _confidence_model() -> tuple[np.ndarray, float] | None:
+    if not os.path.exists(CONFIDENCE_MODEL):
+        return None
+    with open(CONFIDENCE_MODEL) as f:
+        m = json.load(f)
+    return np.asarray(m["coef"], dtype=float), float(m["intercept"])
+
+
+def column_confidence(p: np.ndarray, rows: np.ndarray, contrast: np.ndarray, skyline: np.ndarray) -> np.ndarray:
+    """(W,) in [0, 1]: the fitted probability that the column is within 5 px of the truth
+    (the product of margin and contrast where no fitted model ships)."""
+    x = confidence_features(p, rows, contrast, skyline)
+    model = _confidence_model()
+    if model is None:
+        return np.clip(x[:, 0], 0, 1) * np.clip(x[:, 1], 0, 1)
+    coef, intercept = model
+    return 1.0 / (1.0 + np.exp(-(x @ coef + intercept)))
+
+
+def _extract_reduced(image: np.ndarray, params: SkylineParams) -> ExtractedSkyline:
+    """Extract on a copy reduced to ``params.work_width``, then refine each column at full
+    resolution: the strongest colour edge within (scale + 2) px of the scaled-up boundary,
+    then the sub-pixel step. Coordinates are those of the full image."""
+    import cv2
+
+    H, W = image.shape[:2]
+    scale = W / params.work_width
+    small = cv2.resize(image, (params.work_width, int(round(H / scale))), interpolation=cv2.INTER_AREA)
+    coarse = extract_skyline(small, params)
+    sx = W / small.shape[1]
+    sy = H / small.shape[0]
+    u_small = (np.arange(W) + 0.5) / sx - 0.5
+    base = np.arange(small.shape[1])
+
+    def upcol(values):
+        return np.interp(u_small, base, values)
+
+    finite = np.isfinite(coarse.skyline)
+    v0 = upcol(np.where(finite, coarse.skyline, small.shape[0])) * sy
+    all_sky = upcol((~finite).astype(float)) > 0.5
+    reach = int(np.ceil(max(sx, sy))) + 2
+    rows = _refine_in_band(image, np.round(v0).astype(int), reach)
+    band = image[np.clip(rows[None, :] + np.arange(-6, 6)[:, None], 0, H - 1), np.arange(W)[None, :]]
+    lab = cv2.cvtColor(band.astype(np.float32) / 255.0, cv2.COLOR_RGB2Lab)
+    local = np.concatenate([lab, np.zeros(lab.shape[:2] + (2,), np.float32)], axis=2)
+    sub, _ = _subpixel(local, np.full(W, 6))
+    skyline = np.where(all_sky, np.nan, np.where(rows <= 0, 0.0, sub - 6 + rows))
+    p_full = cv2.resize(coarse.sky_probability, (W, H), interpolation=cv2.INTER_LINEAR)
+    confidence = np.interp(u_small, base, coarse.confidence)
+    return ExtractedSkyline(skyline, confidence, p_full)
+
+
+def _refine_in_band(image: np.ndarray, rows: np.ndarray, reach: int) -> np.ndarray:
+    """(W,) per column, the boundary row within ``reach`` of ``rows`` with the largest Lab
+    contrast between the 3 rows above and the 3 below, ties to the nearest."""
+    import cv2
+
+    H, W = image.shape[:2]
+    offsets = np.arange(-reach - 3, reach + 3)
+    band_rows = np.clip(rows[None, :] + offsets[:, None], 0, H - 1)
+    band = image[band_rows, np.arange(W)[None, :]]
+    lab = cv2.cvtColor(band.astype(np.float32) / 255.0, cv2.COLOR_RGB2Lab).astype(np.float64)
+    csum = np.concatenate([np.zeros((1, W, 3)), np.cumsum(lab, axis=0)])
+    b = np.arange(3, 2 * reach + 4)  # boundary between band rows b-1 and b
+    contrast = np.linalg.norm((csum[b] - csum[b - 3]) - (csum[b + 3] - csum[b]), axis=2) / 3.0
+    contrast -= 0.05 * np.abs(offsets[b])[:, None]  # ties to the nearest
+    best = offsets[b][np.argmax(contrast, axis=0)]
+    return np.clip(rows + best, 0, H)

@@ -4,9 +4,13 @@ Every pixel (supersampled on a regular sub-pixel grid) casts a primary ray
 into the Mitsuba scene; hits are shaded with a sun (Lambert + cast shadows
 by a second ray test), an albedo that varies with elevation, slope and a
 deterministic texture (forest, meadow, rock, snow), and aerial-perspective
-haze with distance; misses get a sky gradient with a sun glow. Optional
-sensor noise and foreground occluders (conifers and posts rising above the
-skyline). Everything is deterministic for a given ``seed``.
+haze with distance; misses get a sky gradient with a sun glow. Sky types
+(``Look.sky``): clear, hazy, overcast (diffuse light, grey sky) and sunset (a
+warm, bright sky behind dark, back-lit terrain). Optional sensor noise,
+foreground occluders (conifers and posts rising above the skyline), cloud banks
+sitting on the ridges (behind the terrain: the skyline stays the terrain's) and
+power lines across the frame (cables count as sky, as in the CH1 masks).
+Everything is deterministic for a given ``seed``.
 """
 
 from __future__ import annotations
@@ -34,6 +38,28 @@ class Look:
     seed: int = 0
     sky_horizon: tuple[float, float, float] = (0.78, 0.84, 0.90)
     sky_zenith: tuple[float, float, float] = (0.25, 0.45, 0.80)
+    sky: str = "clear"  # clear (the two colours above), hazy, overcast, sunset
+    clouds: float = 0.0  # in [0, 1]: cover of the cloud banks that sit on the ridges
+    power_lines: int = 0  # cables sagging across the frame
+
+
+# sky type -> (horizon colour, zenith colour, direct sunlight, sun glow); clear uses Look's colours
+SKY_TYPES = {
+    "clear": (None, None, 1.4, 0.5),
+    "hazy": ((0.86, 0.87, 0.88), (0.58, 0.66, 0.80), 1.0, 0.6),
+    "overcast": ((0.80, 0.80, 0.82), (0.68, 0.69, 0.72), 0.15, 0.05),
+    "sunset": ((1.00, 0.62, 0.34), (0.30, 0.33, 0.56), 0.25, 1.2),
+}
+
+
+def sky_palette(look: Look) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """(horizon RGB, zenith RGB, direct-light factor, glow factor) of ``look.sky``."""
+    if look.sky not in SKY_TYPES:
+        raise ValueError(f"unknown sky type {look.sky!r} (one of {', '.join(SKY_TYPES)})")
+    horizon, zenith, direct, glow = SKY_TYPES[look.sky]
+    if horizon is None:
+        horizon, zenith = look.sky_horizon, look.sky_zenith
+    return np.array(horizon), np.array(zenith), direct, glow
 
 
 @dataclass(frozen=True)
@@ -103,10 +129,52 @@ def _albedo(points, normals, snowline: float, zmin: float, zmax: float, seed: in
 def _sky(dirs, look: Look, sun) -> np.ndarray:
     elevation = np.arcsin(np.clip(dirs[..., 2], -1, 1))
     w = np.clip(elevation / np.radians(35.0), 0, 1) ** 0.6
-    horizon, zenith = np.array(look.sky_horizon), np.array(look.sky_zenith)
+    horizon, zenith, _, glow_factor = sky_palette(look)
     sky = horizon + (zenith - horizon) * w[..., None]
     glow = np.exp(-np.arccos(np.clip(dirs @ sun, -1, 1)) / 0.12)
-    return sky + 0.5 * glow[..., None]
+    return sky + glow_factor * glow[..., None]
+
+
+def _smooth_noise(shape: tuple[int, int], cells: tuple[int, int], rng: np.random.Generator) -> np.ndarray:
+    """Smooth random field on a grid of ``shape``: a ``cells`` grid of normal values, up-sampled bicubically."""
+    import cv2
+
+    coarse = rng.normal(size=(cells[0] + 3, cells[1] + 3)).astype(np.float32)
+    big = cv2.resize(coarse, (shape[1] * (cells[1] + 3) // cells[1], shape[0] * (cells[0] + 3) // cells[0]),
+                     interpolation=cv2.INTER_CUBIC)
+    return big[: shape[0], : shape[1]]
+
+
+def _cloud_banks(shape: tuple[int, int], s: int, skyline: np.ndarray, look: Look) -> np.ndarray:
+    """(H*s, W*s) cloud opacity in [0, 1]: banks of fractal cloud resting on the skyline,
+    up to a third of the frame high; ``look.clouds`` sets their cover."""
+    Hs, Ws = shape
+    rng = np.random.default_rng(look.seed + 104729)
+    noise = sum(_smooth_noise(shape, (max(2, Hs // (s * c)), max(2, Ws // (s * c))), rng) / k
+                for c, k in ((64, 1.0), (24, 2.0), (8, 4.0)))
+    noise = (noise - noise.mean()) / max(float(noise.std()), 1e-6)
+    ground = np.where(np.isfinite(skyline), skyline, Hs / s * 0.6)
+    top = np.repeat(ground, s)[None, :] * s
+    rows = np.arange(Hs)[:, None] + 0.5
+    thickness = Hs / 3.0 * (0.4 + 0.6 * np.clip(0.5 + 0.5 * _smooth_noise((1, Ws), (1, 4), rng), 0, 1))
+    near_ridge = np.clip(1.0 - (top - rows) / thickness, 0, 1)
+    threshold = 1.2 - 2.4 * np.clip(look.clouds, 0, 1)
+    return np.clip((noise + 1.5 * near_ridge - 1.0 - threshold) / 0.6, 0, 1)
+
+
+def _power_lines(shape: tuple[int, int], s: int, look: Look) -> np.ndarray:
+    """(H*s, W*s) bool: ``look.power_lines`` sagging cables, 1-2 px thick, across the frame."""
+    Hs, Ws = shape
+    rng = np.random.default_rng(look.seed + 15485863)
+    u = (np.arange(Ws) + 0.5) / Ws
+    rows = np.arange(Hs)[:, None] + 0.5
+    mask = np.zeros(shape, dtype=bool)
+    for _ in range(int(look.power_lines)):
+        v0, sag, centre = rng.uniform(0.05, 0.45) * Hs, rng.uniform(0.02, 0.2) * Hs, rng.uniform(0.2, 0.8)
+        tilt = rng.uniform(-0.1, 0.1) * Hs
+        v = v0 + tilt * (u - 0.5) + sag * ((u - centre) / max(centre, 1 - centre)) ** 2
+        mask |= np.abs(rows - v[None, :]) <= 0.5 * s * rng.uniform(1.0, 2.0)
+    return mask
 
 
 def _occluders(W: int, H: int, s: int, skyline: np.ndarray, look: Look):
@@ -164,6 +232,13 @@ def render_photo(terrain: Terrain, pose: Pose, intrinsics: Intrinsics, look: Loo
     normals = np.where(normals[..., 2:3] < 0, -normals, normals)
 
     colour = _sky(dirs, look, sun)
+    horizon, _, direct, _ = sky_palette(look)
+    skyline = render_skylines(terrain, pose, intrinsics)
+    if look.clouds > 0:
+        cloud = _cloud_banks(colour.shape[:2], s, skyline, look)[..., None]
+        shade = 0.93 - 0.25 * np.clip(_smooth_noise(colour.shape[:2], (max(2, H // 16), max(2, W // 16)),
+                                                     np.random.default_rng(look.seed + 3)), 0, 1)[..., None]
+        colour = colour * (1 - cloud) + (shade * (0.5 + 0.5 * horizon)) * cloud
     if hit.any():
         z = terrain.dem.elevation
         snowline = max(2400.0, float(np.quantile(z, 0.85))) if look.snowline is None else look.snowline
@@ -172,17 +247,18 @@ def render_photo(terrain: Terrain, pose: Pose, intrinsics: Intrinsics, look: Loo
         shadow_from = p + 0.5 * n
         in_shadow = terrain.ray_test(shadow_from, np.broadcast_to(sun, p.shape), viewer_xy=shadow_from[:, :2])
         albedo = _albedo(p, n, snowline, float(z.min()), float(z.max()), look.seed)
-        sky_light = np.array(look.sky_horizon) * (0.25 + 0.15 * n[:, 2:3])
-        radiance = albedo * (sky_light + 1.4 * (lit * ~in_shadow)[:, None])
+        sky_light = horizon * (0.25 + 0.15 * n[:, 2:3])
+        radiance = albedo * (sky_light + direct * (lit * ~in_shadow)[:, None])
         transmittance = np.exp(-t[hit] / look.haze_distance)[:, None]
-        colour[hit] = radiance * transmittance + np.array(look.sky_horizon) * (1 - transmittance)
+        colour[hit] = radiance * transmittance + horizon * (1 - transmittance)
 
-    skyline = render_skylines(terrain, pose, intrinsics)
     sky_boundary = skyline.copy()
     if look.occluders > 0:
         mask, occ_colour, top = _occluders(W, H, s, skyline, look)
         colour[mask] = occ_colour[mask]
         sky_boundary = np.fmin(skyline, np.where(np.isfinite(top), top, np.nan))
+    if look.power_lines > 0:
+        colour[_power_lines(colour.shape[:2], s, look)] = (0.08, 0.08, 0.09)
 
     image = colour.reshape(H, s, W, s, 3).mean(axis=(1, 3))
     if look.noise > 0:

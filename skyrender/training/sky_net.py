@@ -1,0 +1,184 @@
+"""Train the sky network of :mod:`skyrender.features.sky_net` and export it to ONNX.
+
+``python -m skyrender.training.sky_net [--steps 3000] [--seed 0]`` (``make train-sky-net``)
+
+Data: the *training* side of the fixed split (``experiments/photos/split.json``: CH1
+photos of the training places and web001-web044) and renders with varied skies
+(:func:`skyrender.training.synthetic_skies.training_renders`: sunset silhouettes,
+overcast, haze, clouds on ridges, snow, power lines, occluders). Validation photos are
+never read. Each step takes one picture at a random width (352-544 px), flipped at
+random, with random exposure, white balance, gamma, saturation and noise; the loss
+is the binary cross-entropy at half resolution, weighted 5x within 3 px of the
+boundary, and 0 where the truth is unknown (Web columns with no red mark).
+
+Deterministic for a seed on one machine (PyTorch's CPU kernels, 2 threads). Writes
+the ONNX weights and ``sky_net.json`` (seed, steps, data counts, loss curve) beside them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import numpy as np
+
+from ..datasets.real_photos import items_on_side
+from ..features.sky_net import STRIDE, WEIGHTS, net_input
+
+TRAIN_WIDTHS = (352, 544)  # random input width per step (multiples of STRIDE)
+PRELOAD_WIDTH = 640
+
+
+def build_model():
+    """The network: a four-level U-Net, output P(sky) logits at half the input resolution."""
+    import torch
+    from torch import nn
+
+    def block(i, o, stride=1, dilation=1):
+        return nn.Sequential(nn.Conv2d(i, o, 3, stride=stride, padding=dilation, dilation=dilation), nn.ReLU())
+
+    class SkyNet(nn.Module):
+        def __init__(self):
+            super().__init__()
+            self.enc2 = nn.Sequential(block(4, 16, 2), block(16, 16))  # 1/2
+            self.enc4 = nn.Sequential(block(16, 32, 2), block(32, 32))  # 1/4
+            self.enc8 = nn.Sequential(block(32, 48, 2), block(48, 48))  # 1/8
+            self.ctx = nn.Sequential(block(48, 64, 2), block(64, 64, dilation=2), block(64, 64, dilation=4))  # 1/16
+            self.dec8 = block(64 + 48, 48)
+            self.dec4 = block(48 + 32, 32)
+            self.dec2 = block(32 + 16, 12)
+            self.head = nn.Conv2d(12, 1, 1)
+
+        def forward(self, x):
+            up = nn.functional.interpolate
+            e2 = self.enc2(x)
+            e4 = self.enc4(e2)
+            e8 = self.enc8(e4)
+            c = self.ctx(e8)
+            d8 = self.dec8(torch.cat([up(c, scale_factor=2.0, mode="bilinear", align_corners=False), e8], 1))
+            d4 = self.dec4(torch.cat([up(d8, scale_factor=2.0, mode="bilinear", align_corners=False), e4], 1))
+            d2 = self.dec2(torch.cat([up(d4, scale_factor=2.0, mode="bilinear", align_corners=False), e2], 1))
+            return self.head(d2)
+
+    return SkyNet()
+
+
+def _resize_width(image: np.ndarray, width: int) -> np.ndarray:
+    import cv2
+
+    h = int(round(image.shape[0] * width / image.shape[1]))
+    return cv2.resize(image, (width, h), interpolation=cv2.INTER_AREA)
+
+
+def load_training_set(renders: int, seed: int) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """(name, RGB uint8 image, P(sky) float32 with NaN = unknown) at :data:`PRELOAD_WIDTH`."""
+    import cv2
+
+    from ..features.photo_io import load_photo
+
+    data = []
+    for it in items_on_side("train"):
+        terrain = it.truth_mask()
+        sky = np.where(terrain == 0.5, np.nan, 1.0 - terrain).astype(np.float32)
+        data.append((it.key, _resize_width(load_photo(it.image_path), PRELOAD_WIDTH), _resize_width(sky, PRELOAD_WIDTH)))
+    if renders:
+        from .synthetic_skies import training_renders
+
+        for name, image, sky in training_renders(renders, seed=seed):
+            data.append((name, _resize_width(image, PRELOAD_WIDTH), _resize_width(sky.astype(np.float32), PRELOAD_WIDTH)))
+    del cv2
+    return data
+
+
+def augment(image: np.ndarray, sky: np.ndarray, rng: np.random.Generator):
+    """A random width, flip, exposure, white balance, gamma, saturation and noise."""
+    import cv2
+
+    lo, hi = TRAIN_WIDTHS
+    w = int(rng.integers(lo // STRIDE, hi // STRIDE + 1)) * STRIDE
+    h = max(STRIDE, int(round(image.shape[0] * w / image.shape[1] / STRIDE)) * STRIDE)
+    img = cv2.resize(image, (w, h), interpolation=cv2.INTER_AREA).astype(np.float32) / 255.0
+    lab = cv2.resize(np.nan_to_num(sky, nan=-1.0), (w // 2, h // 2), interpolation=cv2.INTER_AREA)
+    known = cv2.resize(np.isfinite(sky).astype(np.float32), (w // 2, h // 2), interpolation=cv2.INTER_AREA) > 0.999
+    if rng.random() < 0.5:
+        img, lab, known = img[:, ::-1], lab[:, ::-1], known[:, ::-1]
+    grey = img.mean(axis=2, keepdims=True)
+    img = grey + (img - grey) * rng.uniform(0.6, 1.4)  # saturation
+    img = img * rng.uniform(0.85, 1.15, size=3) * rng.uniform(0.7, 1.3)  # white balance, exposure
+    img = np.clip(img, 0, 1) ** rng.uniform(0.7, 1.4)
+    img = img + rng.normal(0, rng.uniform(0, 0.02), img.shape)
+    img = (np.clip(img, 0, 1) * 255 + 0.5).astype(np.uint8)
+    return np.ascontiguousarray(img), np.ascontiguousarray(lab), np.ascontiguousarray(known)
+
+
+def boundary_weight(sky: np.ndarray, known: np.ndarray, reach: int = 3, gain: float = 4.0) -> np.ndarray:
+    """Per-pixel loss weight: 1 + ``gain`` within ``reach`` px of a sky/terrain change; 0 unknown."""
+    import cv2
+
+    hard = (sky > 0.5).astype(np.uint8)
+    edge = cv2.morphologyEx(hard, cv2.MORPH_GRADIENT, np.ones((3, 3), np.uint8))
+    near = cv2.dilate(edge, np.ones((2 * reach + 1, 2 * reach + 1), np.uint8)) > 0
+    return np.where(known, 1.0 + gain * near, 0.0).astype(np.float32)
+
+
+def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: int = 100) -> dict:
+    import torch
+
+    torch.manual_seed(seed)
+    torch.set_num_threads(max(1, min(2, os.cpu_count() or 1)))
+    rng = np.random.default_rng(seed)
+    data = load_training_set(renders, seed)
+    model = build_model()
+    opt = torch.optim.Adam(model.parameters(), lr=2e-3)
+    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=2e-3, total_steps=steps, pct_start=0.1)
+    losses, curve, t0 = [], [], time.perf_counter()
+    for step in range(steps):
+        _, image, sky = data[int(rng.integers(len(data)))]
+        img, lab, known = augment(image, sky, rng)
+        x = torch.from_numpy(net_input(img, (img.shape[1], img.shape[0])))
+        y = torch.from_numpy(np.clip(lab, 0, 1))[None, None]
+        wgt = torch.from_numpy(boundary_weight(lab, known))[None, None]
+        logits = model(x)
+        loss = (torch.nn.functional.binary_cross_entropy_with_logits(logits, y, reduction="none") * wgt).sum() / wgt.sum().clamp(min=1)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        sched.step()
+        losses.append(loss.item())
+        if (step + 1) % log_every == 0:
+            curve.append({"step": step + 1, "loss": float(np.mean(losses[-log_every:])),
+                          "seconds": round(time.perf_counter() - t0, 1)})
+            print(f"step {step + 1:5d}  loss {curve[-1]['loss']:.4f}  {curve[-1]['seconds']:.0f} s", flush=True)
+    model.eval()
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    example = torch.zeros(1, 4, 256, 512)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        torch.onnx.export(model, example, out, dynamo=False, input_names=["x"], output_names=["logits"],
+                          dynamic_axes={"x": {2: "h", 3: "w"}, "logits": {2: "h2", 3: "w2"}}, opset_version=17)
+    log = {"seed": seed, "steps": steps, "renders": renders, "photos": len(data) - renders,
+           "train_widths": TRAIN_WIDTHS, "torch": torch.__version__, "curve": curve,
+           "seconds": round(time.perf_counter() - t0, 1)}
+    with open(os.path.splitext(out)[0] + ".json", "w") as f:
+        json.dump(log, f, indent=1)
+    return log
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=3000)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--renders", type=int, default=60, help="synthetic training renders with varied skies")
+    parser.add_argument("--out", default=WEIGHTS)
+    args = parser.parse_args(argv)
+    log = train(args.steps, args.seed, args.renders, args.out)
+    print(f"wrote {args.out} ({log['photos']} photos, {log['renders']} renders, {log['seconds']:.0f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
