@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: install demo test bench bench-render bench-skyline bench-localize clean
+.PHONY: install demo test bench bench-render bench-skyline bench-localize train-sky-net clean
 
 install: $(STAMP)
 
@@ -30,6 +30,13 @@ bench-skyline: install
 
 bench-localize: install
 	$(BIN)/python -m skyrender.benchmarks.localizer
+
+# retrain the sky network and refit the boundary search on the training split (CPU, ~10 min);
+# reproduces skyrender/features/weights/ for the seed
+train-sky-net: install
+	$(BIN)/python -m pip install -q -e '.[dev,train]'
+	$(BIN)/python -m skyrender.training.sky_net --steps 4000 --seed 0 --renders 60
+	$(BIN)/python -m skyrender.training.skyline_fit --photos 60
 
 bench-render: install
 	$(BIN)/python -m skyrender.benchmarks.renderer

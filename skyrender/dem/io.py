@@ -44,30 +44,97 @@ def _crs_string(crs) -> str | None:
     return f"EPSG:{epsg}" if epsg else c.to_wkt()
 
 
-def load_dem(path: str | os.PathLike | None = None, *, crs=None, cell_size: float | None = None,
-             resolution: float | None = None) -> DEM:
+RASTER_SUFFIXES = (".hgt", ".tif", ".tiff", ".asc", ".vrt")
+
+
+def load_dem(path: str | os.PathLike | list | tuple | None = None, *, crs=None, cell_size: float | None = None,
+             resolution: float | None = None, bounds: tuple[float, float, float, float] | None = None) -> DEM:
     """Read a DEM into the world frame of CONTRACT.md, voids filled and spikes repaired.
 
     Parameters
     ----------
-    path : file path, or ``builtin:jacksboro`` / None for the built-in real DEM.
+    path : file path, or ``builtin:jacksboro`` / None for the built-in real DEM. Several
+        tiles are mosaicked into one DEM: give a list of paths, paths joined by commas,
+        a directory (every ``.hgt``/``.tif`` in it) or a GDAL VRT.
     crs : CRS of the file when it has none (e.g. ``EPSG:31254`` for an ESRI grid),
         or of a ``.npy``/``.npz`` array. Without one, such DEMs use a local frame.
     cell_size : metres per cell, required for ``.npy`` (and ``.npz`` without one).
     resolution : cell size in metres after reprojecting a geographic DEM
         (default: the geometric mean of the source cell's sides, to 1 m).
+    bounds : (west, south, east, north) in the raster files' CRS (degrees for SRTM):
+        read only that window of the tiles (a search area inside a large mosaic).
     """
     if path is None or str(path) in BUILTIN_DEMS:
         return _load_jacksboro(resolution)
-    path = os.fspath(path)
-    if not os.path.exists(path):
-        raise InputError(f"DEM file not found: {path}")
-    if os.path.isdir(path):
-        raise InputError(f"DEM path is a directory, not a file: {path}")
+    tiles = dem_tiles(path)
+    if len(tiles) > 1 or bounds is not None:
+        return _load_mosaic(tiles, crs=crs, resolution=resolution, bounds=bounds)
+    path = tiles[0]
     ext = os.path.splitext(path)[1].lower()
     if ext in (".npy", ".npz"):
         return _load_array(path, crs=crs, cell_size=cell_size)
     return _load_raster(path, crs=crs, resolution=resolution)
+
+
+def dem_tiles(path) -> list[str]:
+    """The DEM files a ``--dem`` value names: one file, several (a list or commas), or the
+    rasters of a directory (sorted); InputError where one is missing or none is found."""
+    if isinstance(path, (list, tuple)):
+        parts = [os.fspath(p) for p in path]
+    else:
+        text = os.fspath(path)
+        parts = [p.strip() for p in text.split(",") if p.strip()] if "," in text and not os.path.exists(text) else [text]
+    if len(parts) == 1 and os.path.isdir(parts[0]):
+        folder = parts[0]
+        parts = sorted(os.path.join(folder, f) for f in os.listdir(folder)
+                       if f.lower().endswith(RASTER_SUFFIXES) and not f.lower().endswith(".vrt"))
+        if not parts:
+            raise InputError(f"DEM directory holds no .hgt/.tif/.asc files: {folder}")
+    if not parts:
+        raise InputError("no DEM given")
+    for p in parts:
+        if not os.path.exists(p):
+            raise InputError(f"DEM file not found: {p}")
+        if os.path.isdir(p):
+            raise InputError(f"DEM path is a directory, not a file: {p}")
+    return parts
+
+
+def _load_mosaic(paths: list[str], *, crs, resolution: float | None, bounds=None) -> DEM:
+    """Several raster tiles of one CRS merged into one grid (rasterio.merge), then loaded as
+    one DEM. Adjacent SRTM tiles share their edge row/column: the shared posts coincide."""
+    import rasterio
+    from rasterio.merge import merge
+
+    name = (f"mosaic of {len(paths)} tiles ({os.path.basename(paths[0])}, ...)" if len(paths) > 1
+            else os.path.basename(paths[0])) + (f" in {tuple(round(b, 4) for b in bounds)}" if bounds else "")
+    try:
+        sources = [rasterio.open(p) for p in paths]
+    except Exception as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputError(f"{name}: a tile cannot be read ({first})") from None
+    try:
+        crss = {str(src.crs) for src in sources}
+        if len(crss) > 1:
+            raise InputError(f"{name}: the tiles are in different CRSs ({', '.join(sorted(crss))})")
+        res = {tuple(round(abs(r), 12) for r in src.res) for src in sources}
+        if len(res) > 1:
+            raise InputError(f"{name}: the tiles have different cell sizes")
+        file_crs = sources[0].crs
+        nodata = sources[0].nodata
+        try:
+            data, transform = merge(sources, bounds=bounds, nodata=nodata if nodata is not None else -32768,
+                                    masked=True)
+        except Exception as exc:
+            raise InputError(f"{name}: the tiles cannot be merged ({str(exc).splitlines()[0]})") from None
+    finally:
+        for src in sources:
+            src.close()
+    band = data[0]
+    z = np.ma.getdata(band).astype(np.float64)
+    void = np.ma.getmaskarray(band)
+    crs_str = _crs_string(file_crs) if file_crs else _crs_string(crs)
+    return _georeference(z, void, transform, crs_str, name, resolution)
 
 
 def _load_raster(path: str, *, crs, resolution: float | None) -> DEM:

@@ -1,7 +1,10 @@
-"""Reading the photographs users have: any size, gray/RGB/RGBA, 8 or 16 bit."""
+"""Reading the photographs users have: any size, gray/RGB/RGBA, 8 or 16 bit, phone
+photos with their EXIF orientation applied (every output is in the upright frame), and
+the field of view their EXIF focal length implies."""
 
 from __future__ import annotations
 
+import math
 import os
 
 import numpy as np
@@ -24,11 +27,80 @@ def load_photo(path) -> np.ndarray:
         raise InputError(f"image file not found: {path}")
     if os.path.isdir(path):
         raise InputError(f"image path is a directory: {path}")
-    data = np.fromfile(path, dtype=np.uint8)
+    try:
+        data = np.fromfile(path, dtype=np.uint8)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read the image ({exc.strerror or exc})") from None
     image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
     if image is None:
         raise InputError(f"{path}: not an image that can be read")
-    return as_rgb8(image, name=path, bgr=True)
+    return upright(as_rgb8(image, name=path, bgr=True), exif_orientation(path))
+
+
+# EXIF Orientation tag value -> (rotations by 90 degrees counter-clockwise, then flip left-right)
+_ORIENTATION = {1: (0, False), 2: (0, True), 3: (2, False), 4: (2, True), 5: (1, True), 6: (3, False),
+                7: (3, True), 8: (1, False)}
+DIAGONAL_35MM = math.hypot(36.0, 24.0)  # mm: the diagonal a 35 mm-equivalent focal length refers to
+
+
+def _exif(path: str) -> dict:
+    """EXIF tags of an image file by name (empty where it has none or cannot be parsed)."""
+    try:
+        from PIL import ExifTags, Image
+
+        with Image.open(path) as im:
+            exif = im.getexif()
+            tags = dict(exif)
+            tags.update(exif.get_ifd(ExifTags.IFD.Exif))
+        return {ExifTags.TAGS.get(k, k): v for k, v in tags.items()}
+    except Exception:  # EXIF is optional; a photo with a broken EXIF block is still a photo
+        return {}
+
+
+def exif_orientation(path: str) -> int:
+    """The EXIF Orientation tag (1-8), 1 where absent."""
+    value = _exif(path).get("Orientation", 1)
+    return int(value) if value in _ORIENTATION else 1
+
+
+def upright(image: np.ndarray, orientation: int) -> np.ndarray:
+    """The image turned upright for an EXIF Orientation value (1: as stored)."""
+    turns, flip = _ORIENTATION.get(int(orientation), (0, False))
+    out = np.rot90(image, turns)
+    return np.ascontiguousarray(out[:, ::-1] if flip else out)
+
+
+def exif_fov(path: str) -> float | None:
+    """Horizontal field of view (degrees) of the *upright* photo from its EXIF focal length.
+
+    ``FocalLengthIn35mmFilm`` refers to the 35 mm frame's diagonal (43.3 mm), so the
+    focal length in pixels is f35 * (image diagonal in px) / 43.3 whichever way the photo
+    is turned; without it, ``FocalLength`` with ``FocalPlaneXResolution`` (pixels per unit
+    of ``FocalPlaneResolutionUnit``) gives it. None where EXIF says neither.
+    """
+    tags = _exif(path)
+    try:
+        from PIL import Image
+
+        with Image.open(path) as im:
+            w, h = im.size
+    except Exception:
+        return None
+    if exif_orientation(path) in (5, 6, 7, 8):
+        w, h = h, w
+    f_px = None
+    f35 = tags.get("FocalLengthIn35mmFilm")
+    if f35 and float(f35) > 0:
+        f_px = float(f35) * math.hypot(w, h) / DIAGONAL_35MM
+    else:
+        f_mm, xres = tags.get("FocalLength"), tags.get("FocalPlaneXResolution")
+        unit_mm = {2: 25.4, 3: 10.0, 4: 1.0}.get(int(tags.get("FocalPlaneResolutionUnit", 2) or 2), 25.4)
+        if f_mm and xres and float(f_mm) > 0 and float(xres) > 0:
+            # FocalPlaneXResolution counts pixels of the stored (un-rotated) width
+            f_px = float(f_mm) * float(xres) / unit_mm
+    if not f_px or not math.isfinite(f_px):
+        return None
+    return math.degrees(2 * math.atan(w / (2 * f_px)))
 
 
 def as_rgb8(image: np.ndarray, name: str = "image", bgr: bool = False) -> np.ndarray:
@@ -41,6 +113,9 @@ def as_rgb8(image: np.ndarray, name: str = "image", bgr: bool = False) -> np.nda
     if min(image.shape[:2]) < MIN_SIDE:
         raise InputError(f"{name}: image is {image.shape[1]} x {image.shape[0]} pixels; at least "
                          f"{MIN_SIDE} x {MIN_SIDE} are needed")
+    if image.dtype == np.uint8 and image.shape[2] != 4:  # the common case: no float copy of a large photo
+        out = np.repeat(image, 3, axis=2) if image.shape[2] == 1 else (image[..., ::-1] if bgr else image)
+        return np.ascontiguousarray(out)
     if image.dtype == np.uint16:
         image = (image.astype(np.float64) / 257.0).round()
     elif np.issubdtype(image.dtype, np.floating):

@@ -34,7 +34,7 @@ import numpy as np
 from .sky import pixel_features, sky_probability
 from .sky_net import sky_logits
 
-CONFIDENCE_MODEL = os.path.join(os.path.dirname(__file__), "weights", "sky_net_confidence.json")
+FITTED = os.path.join(os.path.dirname(__file__), "weights", "sky_net_fit.json")  # by skyrender.training.skyline_fit
 
 
 @dataclass(frozen=True)
@@ -44,9 +44,10 @@ class SkylineParams:
     jump_cap: float = 12.0  # no jump costs more than this (vertical edges)
     edge_bonus: float = 16.0  # weight of the colour edge at the boundary
     edge_percentile: float = 97.0  # edges this strong or stronger count fully (1.0)
-    net_edge_bonus: float = 4.0  # edge weight with the network's probability (fitted on training photos)
-    net_jump_cost: float = 0.25  # jump cost with the network's probability (fitted on training photos)
-    net_jump_cap: float = 12.0
+    # the same three with the network's probability; None: as fitted on the training photos
+    net_edge_bonus: float | None = None
+    net_jump_cost: float | None = None
+    net_jump_cap: float | None = None
     work_width: int = 1600  # wider photos are processed on a copy reduced to this width
     components: int = 5  # Gaussian components per class in the colour-texture mixtures
     rounds: int = 3  # boundary estimate -> re-fit colour models -> boundary
@@ -210,7 +211,9 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
 
         logits = cv2.resize(sky_logits(image), (W, H), interpolation=cv2.INTER_LINEAR)
         p = (1.0 / (1.0 + np.exp(-np.clip(logits, -30, 30)))).astype(np.float32)
-        rows = _boundary(features, p, params.net_edge_bonus, params.net_jump_cost, params.net_jump_cap,
+        fitted = _fitted()
+        rows = _boundary(features, p, *(fitted[k] if getattr(params, k) is None else getattr(params, k)
+                                        for k in ("net_edge_bonus", "net_jump_cost", "net_jump_cap")),
                          params.edge_percentile, 0.0)
     else:
         raise ValueError(f"unknown skyline method {params.method!r} (net or gmm)")
@@ -272,24 +275,26 @@ def confidence_features(p: np.ndarray, rows: np.ndarray, contrast: np.ndarray, s
                             1.0 - np.abs(2.0 * at - 1.0)])
 
 
+DEFAULT_FIT = {"net_edge_bonus": 4.0, "net_jump_cost": 0.25, "net_jump_cap": 12.0, "coef": None, "intercept": None}
+
+
 @lru_cache(maxsize=1)
-def _confidence_model() -> tuple[np.ndarray, float] | None:
-    if not os.path.exists(CONFIDENCE_MODEL):
-        return None
-    with open(CONFIDENCE_MODEL) as f:
-        m = json.load(f)
-    return np.asarray(m["coef"], dtype=float), float(m["intercept"])
+def _fitted() -> dict:
+    """The weights fitted on the training photos, or neutral ones before any fit."""
+    if not os.path.exists(FITTED):
+        return DEFAULT_FIT
+    with open(FITTED) as f:
+        return {**DEFAULT_FIT, **json.load(f)}
 
 
 def column_confidence(p: np.ndarray, rows: np.ndarray, contrast: np.ndarray, skyline: np.ndarray) -> np.ndarray:
     """(W,) in [0, 1]: the fitted probability that the column is within 5 px of the truth
     (the product of margin and contrast where no fitted model ships)."""
     x = confidence_features(p, rows, contrast, skyline)
-    model = _confidence_model()
-    if model is None:
+    fitted = _fitted()
+    if fitted["coef"] is None:
         return np.clip(x[:, 0], 0, 1) * np.clip(x[:, 1], 0, 1)
-    coef, intercept = model
-    return 1.0 / (1.0 + np.exp(-(x @ coef + intercept)))
+    return 1.0 / (1.0 + np.exp(-(x @ np.asarray(fitted["coef"]) + fitted["intercept"])))
 
 
 def _extract_reduced(image: np.ndarray, params: SkylineParams) -> ExtractedSkyline:

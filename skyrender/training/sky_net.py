@@ -6,8 +6,8 @@ Data: the *training* side of the fixed split (``experiments/photos/split.json``:
 photos of the training places and web001-web044) and renders with varied skies
 (:func:`skyrender.training.synthetic_skies.training_renders`: sunset silhouettes,
 overcast, haze, clouds on ridges, snow, power lines, occluders). Validation photos are
-never read. Each step takes one picture at a random width (352-544 px), flipped at
-random, with random exposure, white balance, gamma, saturation and noise; the loss
+never read. Each step takes one picture at a random width (384-640 px), flipped at
+random, with random exposure, white balance, gamma, saturation, haze veil, contrast and noise; the loss
 is the binary cross-entropy at half resolution, weighted 5x within 3 px of the
 boundary, and 0 where the truth is unknown (Web columns with no red mark).
 
@@ -27,8 +27,8 @@ import numpy as np
 from ..datasets.real_photos import items_on_side
 from ..features.sky_net import STRIDE, WEIGHTS, net_input
 
-TRAIN_WIDTHS = (352, 544)  # random input width per step (multiples of STRIDE)
-PRELOAD_WIDTH = 640
+TRAIN_WIDTHS = (384, 640)  # random input width per step (multiples of STRIDE)
+PRELOAD_WIDTH = 768
 
 
 def build_model():
@@ -106,6 +106,10 @@ def augment(image: np.ndarray, sky: np.ndarray, rng: np.random.Generator):
         img, lab, known = img[:, ::-1], lab[:, ::-1], known[:, ::-1]
     grey = img.mean(axis=2, keepdims=True)
     img = grey + (img - grey) * rng.uniform(0.6, 1.4)  # saturation
+    if rng.random() < 0.5:  # haze: a veil of the sky's colour, and less contrast (pale distant ridges)
+        veil = img[: max(1, h // 10)].reshape(-1, 3).mean(axis=0)
+        img = img + (veil - img) * rng.uniform(0.0, 0.4)
+        img = img.mean() + (img - img.mean()) * rng.uniform(0.6, 1.0)
     img = img * rng.uniform(0.85, 1.15, size=3) * rng.uniform(0.7, 1.3)  # white balance, exposure
     img = np.clip(img, 0, 1) ** rng.uniform(0.7, 1.4)
     img = img + rng.normal(0, rng.uniform(0, 0.02), img.shape)

@@ -1,0 +1,1 @@
+"""Diagnostics on real photographs (what the localizer can hope for)."""

@@ -1,0 +1,108 @@
+"""Fit the boundary search and the column confidence of the learned extractor.
+
+``python -m skyrender.training.skyline_fit`` (``make train-sky-net`` runs it after the
+network) — on the *training* photos of the fixed split only:
+
+1. the dynamic programme's weights with the network's probability (edge bonus, jump
+   cost, jump cap) by grid search, maximising the mean share of columns within 5 px;
+2. the per-column confidence: a logistic regression of "within 5 px of the truth" on
+   :func:`skyrender.features.skyline.confidence_features`, written to
+   ``skyrender/features/weights/sky_net_fit.json`` (read by the extractor).
+
+The network has seen these photos, so its probabilities are sharper on them than on new
+ones; the fitted confidence ranks columns (measured on the validation side by
+``make bench-skyline``) rather than being a calibrated probability.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+
+import numpy as np
+
+from ..datasets.real_photos import items_on_side
+from ..features.skyline import (FITTED, _boundary, _subpixel, confidence_features)
+from ..features.sky import pixel_features
+from ..features.sky_net import sky_logits
+
+EDGE_BONUS = (0.0, 2.0, 4.0, 8.0, 16.0)
+JUMP_COST = (0.1, 0.25, 0.5)
+JUMP_CAP = (6.0, 12.0, 24.0)
+
+
+def prepared(photos: int):
+    """(features, P(sky), truth) of up to ``photos`` training photos, evenly spread."""
+    import cv2
+
+    from ..features.photo_io import load_photo
+
+    items = items_on_side("train")
+    step = max(1, len(items) // photos) if photos else 1
+    out = []
+    for it in items[::step]:
+        image = load_photo(it.image_path)
+        H, W = image.shape[:2]
+        logits = cv2.resize(sky_logits(image), (W, H), interpolation=cv2.INTER_LINEAR)
+        p = (1.0 / (1.0 + np.exp(-np.clip(logits, -30, 30)))).astype(np.float32)
+        out.append((pixel_features(image), p, it.truth_skyline()))
+    return out
+
+
+def within5(skyline: np.ndarray, truth: np.ndarray) -> np.ndarray:
+    has = np.isfinite(truth)
+    e = np.abs(skyline[has] - truth[has])
+    return np.where(np.isfinite(e), e, 1e6) <= 5
+
+
+def fit(photos: int = 60) -> dict:
+    from sklearn.linear_model import LogisticRegression
+
+    data = prepared(photos)
+    best = None
+    for edge, cost, cap in itertools.product(EDGE_BONUS, JUMP_COST, JUMP_CAP):
+        scores = []
+        for features, p, truth in data:
+            rows = _boundary(features, p, edge, cost, cap, 97.0, 0.0)
+            sub, _ = _subpixel(features, rows)
+            H = p.shape[0]
+            scores.append(np.mean(within5(np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub)), truth)))
+        score = float(np.mean(scores))
+        print(f"edge {edge:5.1f} jump {cost:4.2f} cap {cap:4.1f}: mean within 5 px {100 * score:.2f} %", flush=True)
+        if best is None or score > best[0]:
+            best = (score, edge, cost, cap)
+    score, edge, cost, cap = best
+    xs, ys = [], []
+    for features, p, truth in data:
+        rows = _boundary(features, p, edge, cost, cap, 97.0, 0.0)
+        sub, contrast = _subpixel(features, rows)
+        H = p.shape[0]
+        skyline = np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub))
+        has = np.isfinite(truth)
+        xs.append(confidence_features(p, rows, contrast, skyline)[has])
+        ys.append(within5(skyline, truth))
+    x, y = np.concatenate(xs), np.concatenate(ys)
+    model = LogisticRegression(C=1.0, max_iter=1000).fit(x, y) if len(set(y.tolist())) > 1 else None
+    result = {"net_edge_bonus": edge, "net_jump_cost": cost, "net_jump_cap": cap, "train_mean_within5": score,
+              "photos": len(data), "columns": int(len(y)), "columns_within5": float(np.mean(y)),
+              "coef": model.coef_[0].tolist() if model else [0.0, 0.0, 0.0, 0.0],
+              "intercept": float(model.intercept_[0]) if model else 10.0,
+              "features": ["margin", "contrast/15", "roughness px", "1-|2p-1|"]}
+    with open(FITTED, "w") as f:
+        json.dump(result, f, indent=1)
+    return result
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--photos", type=int, default=60, help="training photos used (evenly spread)")
+    args = parser.parse_args(argv)
+    r = fit(args.photos)
+    print(f"best: edge bonus {r['net_edge_bonus']}, jump cost {r['net_jump_cost']}, jump cap {r['net_jump_cap']} "
+          f"(training mean within 5 px {100 * r['train_mean_within5']:.2f} %) and the confidence model -> {FITTED}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
