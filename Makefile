@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: install demo test bench bench-render bench-skyline bench-localize train-sky-net clean
+.PHONY: install demo test bench bench-render bench-skyline bench-localize bench-real oracle train-sky-net clean
 
 install: $(STAMP)
 
@@ -28,6 +28,14 @@ bench: bench-render bench-skyline bench-localize
 bench-skyline: install
 	$(BIN)/python -m skyrender.benchmarks.skyline_photos
 
+# real photos (CH1 validation side) localized against an SRTM mosaic around each place
+bench-real: install
+	$(BIN)/python -m skyrender.benchmarks.real_localize --side validation
+
+# the best fit of each CH1 training photo at its true position (what a localizer can hope for)
+oracle: install
+	$(BIN)/python -m skyrender.diagnostics.oracle --side train
+
 bench-localize: install
 	$(BIN)/python -m skyrender.benchmarks.localizer
 
@@ -35,8 +43,8 @@ bench-localize: install
 # reproduces skyrender/features/weights/ for the seed
 train-sky-net: install
 	$(BIN)/python -m pip install -q -e '.[dev,train]'
-	$(BIN)/python -m skyrender.training.sky_net --steps 4000 --seed 0 --renders 60
-	$(BIN)/python -m skyrender.training.skyline_fit --photos 60
+	$(BIN)/python -m skyrender.training.sky_net --steps 4000 --seed 0 --renders 60 --threads 1
+	$(BIN)/python -m skyrender.training.skyline_fit
 
 bench-render: install
 	$(BIN)/python -m skyrender.benchmarks.renderer

@@ -69,6 +69,9 @@ def render(
     occluders: float = typer.Option(0.0, help="share of columns covered by foreground trees/posts, 0..1"),
     supersample: int = typer.Option(2, help="samples per pixel side (anti-aliasing)"),
     seed: int = typer.Option(0, help="seed for texture, noise and occluders"),
+    sky: str = typer.Option("clear", help="sky type: clear, hazy, overcast, sunset"),
+    clouds: float = typer.Option(0.0, help="cover of cloud banks resting on the ridges, 0..1"),
+    power_lines: int = typer.Option(0, help="cables sagging across the frame (count as sky)"),
     variant: Optional[str] = VariantOpt,
 ):
     """Render a realistic photograph of the terrain from a pose."""
@@ -81,7 +84,12 @@ def render(
 
     width, height_px = parse_size(size)
     intrinsics = Intrinsics.from_fov(fov, width, height_px)
+    from .render.photo import SKY_TYPES
+
+    if sky not in SKY_TYPES:
+        raise InputError(f"--sky must be one of {', '.join(SKY_TYPES)}, got {sky!r}")
     for name, value, lo, hi in (("--noise", noise, 0, 1), ("--occluders", occluders, 0, 1),
+                                ("--clouds", clouds, 0, 1), ("--power-lines", power_lines, 0, 50),
                                 ("--supersample", supersample, 1, 8), ("--haze", haze, 1e-6, float("inf"))):
         if not lo <= value <= hi:
             raise InputError(f"{name} must lie in [{lo}, {hi}], got {value}")
@@ -96,7 +104,8 @@ def render(
     pose = terrain_dem.camera_pose(x, y, height, pan, tilt, swing)
     terrain = Terrain(terrain_dem, curvature=not flat_earth, variant=variant)
     look = Look(sun_azimuth=sun_azimuth, sun_elevation=sun_elevation, haze_distance=haze, noise=noise,
-                occluders=occluders, supersample=supersample, seed=seed)
+                occluders=occluders, supersample=supersample, seed=seed, sky=sky, clouds=clouds,
+                power_lines=power_lines)
     photo = render_photo(terrain, pose, intrinsics, look)
     write_image(out, photo.image)
     if overlay is not None:
@@ -119,19 +128,22 @@ def skyline(
     overlay: Optional[Path] = typer.Option(None, "--overlay", help="write the photo with the skyline drawn"),
     peaks: int = typer.Option(6, "--peaks", help="skyline peaks to report (with --json)"),
     json_out: bool = typer.Option(False, "--json", help="print {width, height, skyline} as one JSON object"),
+    method: str = typer.Option("net", "--method", help="net (learned, default) or gmm (per-photo colour mixtures)"),
 ):
     """Extract the skyline (sky/terrain boundary per column) from a photograph."""
-    from .features import extract_skyline, load_photo, skyline_peaks
+    from .features import SkylineParams, extract_skyline, load_photo, skyline_peaks
     from .io import save_skyline, skyline_to_list
     from .viz import draw_skyline, write_image
 
     if peaks < 0:
         raise InputError(f"--peaks must be >= 0, got {peaks}")
+    if method not in ("net", "gmm"):
+        raise InputError(f"--method must be net or gmm, got {method!r}")
     for path, option in ((out, "--out"), (overlay, "--overlay")):
         if path is not None:
             _check_writable(path, option)
     photo = load_photo(image)
-    result = extract_skyline(photo)
+    result = extract_skyline(photo, SkylineParams(method=method))
     if out is not None:
         save_skyline(out, result.skyline)
     if overlay is not None:
@@ -205,7 +217,8 @@ def localize(
     model_dir: Optional[Path] = typer.Option(None, "--model", help="model directory from 'skyrender model'"),
     dem: Optional[str] = typer.Option(None, "--dem", help="DEM instead of a model: the model is built (and cached)"),
     height: float = typer.Option(..., "--height", help="camera height above ground (m)"),
-    fov: Optional[float] = typer.Option(None, "--fov", help="horizontal field of view (deg); omit if unknown"),
+    fov: Optional[float] = typer.Option(None, "--fov", help="horizontal field of view (deg); omitted: from the "
+                                        "photo's EXIF focal length (refined), else unknown"),
     json_out: bool = typer.Option(False, "--json", help="print the result as one JSON object"),
     overlay: Optional[Path] = typer.Option(None, "--overlay", help="write the photo with both skylines and peaks"),
     geojson: Optional[Path] = typer.Option(None, "--geojson", help="write the camera position and view cone"),
@@ -224,6 +237,7 @@ def localize(
     from dataclasses import replace
 
     from .features import load_photo
+    from .features.photo_io import exif_fov
     from .io import camera_geojson, write_json
     from .localizer import LocalizeParams
     from .localizer import localize as run_localize
@@ -241,9 +255,11 @@ def localize(
             _check_writable(path, option)
     prior = _parse_prior(prior_peak, prior_near)
     photo = load_photo(image)
+    from_exif = exif_fov(str(image)) if fov is None else None
     the_model = _load_or_build_model(model_dir, dem, crs, cell_size, variant)
     terrain = Terrain(the_model.dem, curvature=not flat_earth, variant=variant)
-    params = replace(LocalizeParams(), ordered=not unordered)
+    params = replace(LocalizeParams(), ordered=not unordered, refine_fov=from_exif is not None)
+    fov = fov if from_exif is None else from_exif
     result = run_localize(photo, the_model, height, fov, prior, terrain=terrain, params=params,
                           curvature=not flat_earth)
     if overlay is not None:
@@ -283,27 +299,16 @@ def _parse_prior(prior_peak, prior_near) -> dict | None:
 
 
 def _load_or_build_model(model_dir, dem, crs, cell_size, variant):
-    """The model from --model, or built from --dem and cached next to the user's cache."""
+    """The model from --model, or built from --dem and cached (:func:`skyrender.model.cached_model`)."""
+    from .backend import mitsuba
     from .dem import load_dem
-    from .model import build_model, load_model, save_model
+    from .model import cached_model, load_model
 
     if model_dir is not None:
         return load_model(model_dir)
     terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
-    cache = Path(os.environ.get("SKYRENDER_CACHE", Path.home() / ".cache" / "skyrender")) / terrain_dem.fingerprint()
-    try:
-        return load_model(cache, dem=terrain_dem)
-    except InputError:
-        pass
-    from .backend import mitsuba
-
     mitsuba(variant)
-    built = build_model(terrain_dem)
-    try:
-        save_model(built, cache)
-    except InputError:
-        pass  # no cache: the localization itself still runs
-    return built
+    return cached_model(terrain_dem)
 
 
 def _check_model_dir(path: Path) -> None:

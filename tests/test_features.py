@@ -218,3 +218,26 @@ def test_cli_skyline_on_uniform_images_gives_a_defined_result(fill, tmp_path, ca
     assert code == 0 and out["width"] == 80 and out["height"] == 60 and len(out["skyline"]) == 80
     assert all(v is None or 0 <= v <= 60 for v in out["skyline"])
     assert len(json.loads((tmp_path / "s.json").read_text())) == 80
+
+
+@pytest.fixture(scope="module")
+def builtin_view():
+    """The demo scene's view of the built-in DEM (runs without ../shared/data)."""
+    from skyrender.render import Terrain
+    from skyrender.scenes import load_scene
+
+    scene = load_scene(os.path.join(os.path.dirname(__file__), "..", "scenes", "jacksboro.toml"))
+    return Terrain(scene.dem), scene.views[0].pose, scene.views[0].intrinsics
+
+
+@pytest.mark.parametrize("look", [
+    Look(sky="sunset", sun_azimuth=135.0, sun_elevation=3.0, haze_distance=20_000.0, seed=11),  # back-lit silhouette
+    Look(clouds=0.7, seed=12),  # cloud banks resting on the ridges
+    Look(sky="overcast", power_lines=2, seed=13),  # grey sky, cables across it (cables are sky)
+], ids=["sunset", "clouds-on-ridges", "overcast-cables"])
+def test_rendered_hard_skies_are_extracted_within_two_pixels(look, builtin_view):
+    terrain, pose, K = builtin_view
+    photo = render_photo(terrain, pose, K, look)
+    e = column_errors(extract_skyline(photo.image).skyline, photo.sky_boundary)
+    assert np.median(e) <= 2.0
+    assert np.mean(e <= 5) >= 0.9

@@ -142,6 +142,32 @@ def format_table(rows: list[dict], methods: list[str]) -> str:
     return "\n".join(lines)
 
 
+def speed(items, repeats: int = 3) -> dict:
+    """Seconds of the learned extractor (median of ``repeats``, after a warm-up) on a
+    1024-wide photo and on a 12-megapixel copy of it (4x up-scaled, 4096 x 3072), and the
+    12-MP copy's median error against the 4x truth."""
+    import cv2
+
+    from ..features import extract_skyline, load_photo
+
+    it = next(i for i in items if i.key.startswith("ch1/"))
+    image = load_photo(it.image_path)
+    big = cv2.resize(image, (image.shape[1] * 4, image.shape[0] * 4), interpolation=cv2.INTER_CUBIC)
+    out = {"photo": it.key}
+    for name, img in (("1024", image), ("12mp", big)):
+        extract_skyline(img)
+        times = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            result = extract_skyline(img)
+            times.append(time.perf_counter() - t)
+        scale = img.shape[1] / image.shape[1]
+        e = column_errors(result.skyline, np.repeat(it.truth_skyline(), scale) * scale) / scale
+        out[name] = {"width": int(img.shape[1]), "height": int(img.shape[0]), "seconds": float(np.median(times)),
+                     "median_px_at_1024": float(np.median(e))}
+    return out
+
+
 def git_commit() -> str:
     import subprocess
 
@@ -187,6 +213,12 @@ def main(argv=None) -> int:
                         + (f"{100 * conf['doubtful_within5']:.1f} % within 5 px (median {conf['doubtful_median_px']:.2f} px)"
                            if conf["doubtful_columns"] else "none"))
         text.append("")
+    sp = speed(items_on_side("validation", args.data) or items_on_side("train", args.data))
+    report["speed"] = sp
+    text.append(f"speed ({sp['photo']}, median of 3): {sp['1024']['width']} x {sp['1024']['height']}: "
+                f"{sp['1024']['seconds']:.2f} s; {sp['12mp']['width']} x {sp['12mp']['height']} (12.6 MP): "
+                f"{sp['12mp']['seconds']:.2f} s, median error {sp['12mp']['median_px_at_1024']:.2f} px at 1024 scale "
+                f"({sp['1024']['median_px_at_1024']:.2f} px on the 1024 original)")
     out = "\n".join(text)
     print(out)
     os.makedirs(args.out, exist_ok=True)

@@ -10,7 +10,10 @@ within 2 km of each other, so a burst of photos from one spot, and the spots of 
 hike, stay together) and whole places go to one side; the Web training set has no
 positions, so it is split in two contiguous blocks of its numbering (web001-web044
 train, web045-web064 validation). ``web`` and ``geopose3k`` are never trained on: they
-are held out, like the validation side.
+are held out, like the validation side. A *dev* part of the training side (the CH1
+training places but the largest, and web035-web044) is kept from the network: the
+boundary search and the confidence are fitted on it, and training set-ups are compared
+on it, so that nothing is chosen by looking at the validation side.
 
 ``python -m skyrender.datasets.real_photos --write-split`` rewrites the split file.
 """
@@ -32,6 +35,7 @@ SPLIT_FILE = os.path.join(REPO, "experiments", "photos", "split.json")
 PLACE_LINK_KM = 2.0  # cameras chained within this distance are one place
 VALIDATION_SHARE = 0.45  # of CH1 photos, by whole places
 WEB_TRAIN_LAST = 44  # web001..web044 train, web045..web064 validation
+WEB_DEV_FIRST = 35  # of those, web035..web044 are dev
 
 
 @dataclass(frozen=True)
@@ -138,7 +142,8 @@ def make_split(items: list[PhotoItem]) -> dict:
     for it in items:
         set_name, name = it.key.split("/", 1)
         if set_name == "web_train":
-            side = "train" if int(name[3:]) <= WEB_TRAIN_LAST else "validation"
+            number = int(name[3:])
+            side = "validation" if number > WEB_TRAIN_LAST else ("dev" if number >= WEB_DEV_FIRST else "train")
             photos[it.key] = {"side": side, "place": f"web/{name}"}
         elif set_name in ("web", "geopose3k"):
             photos[it.key] = {"side": "heldout", "place": it.key}
@@ -153,16 +158,22 @@ def make_split(items: list[PhotoItem]) -> dict:
             side = "validation" if counts["validation"] / total < VALIDATION_SHARE and counts["train"] > 0 else "train"
             side_of[p] = side
             counts[side] += sizes[p]
+        training = [p for p in side_of if side_of[p] == "train"]
+        largest = max(training, key=lambda p: (sizes[p], -p))
+        for p in training:
+            if p != largest:
+                side_of[p] = "dev"
         for it, p in zip(ch1, label):
             photos[it.key] = {"side": side_of[p], "place": f"ch1/place{p:02d}"}
     rule = (f"CH1: places = cameras chained within {PLACE_LINK_KM} km; places largest first to the side "
-            f"further below its share (validation {VALIDATION_SHARE:.0%}). web_train: web001-web{WEB_TRAIN_LAST:03d} "
-            "train, the rest validation. web, geopose3k: held out (never trained on).")
+            f"further below its share (validation {VALIDATION_SHARE:.0%}); of the training places all but the "
+            f"largest are dev. web_train: web001-web{WEB_DEV_FIRST - 1:03d} train, web{WEB_DEV_FIRST:03d}-"
+            f"web{WEB_TRAIN_LAST:03d} dev, the rest validation. web, geopose3k: held out (never trained on).")
     return {"rule": rule, "photos": photos}
 
 
 def load_split(path: str = SPLIT_FILE) -> dict[str, str]:
-    """``{key: side}`` from the committed split file (side: train, validation, heldout)."""
+    """``{key: side}`` from the committed split file (side: train, dev, validation, heldout)."""
     with open(path) as f:
         return {k: v["side"] for k, v in json.load(f)["photos"].items()}
 
@@ -180,7 +191,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     split = make_split(photo_items(args.data))
     sides = [v["side"] for v in split["photos"].values()]
-    for s in ("train", "validation", "heldout"):
+    for s in ("train", "dev", "validation", "heldout"):
         print(f"{s}: {sides.count(s)} photos")
     if args.write_split:
         with open(SPLIT_FILE, "w") as f:

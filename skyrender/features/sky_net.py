@@ -17,7 +17,7 @@ from functools import lru_cache
 
 import numpy as np
 
-NET_WIDTH = 640  # photos are reduced to this width for the network
+NET_WIDTH = 512  # photos are reduced to this width for the network
 STRIDE = 16  # the network's total down-sampling: input sides are multiples of it
 WEIGHTS = os.path.join(os.path.dirname(__file__), "weights", "sky_net.onnx")
 

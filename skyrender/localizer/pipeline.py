@@ -64,6 +64,7 @@ class LocalizeParams:
     use_horizons: bool = True  # also match the skyline against the model's far horizons (no peaks needed)
     horizon: HorizonSearchParams = field(default_factory=HorizonSearchParams)
     horizon_fov_step: tuple = (5.0, 2.5, 1.25)  # unknown fov: probes around the best fov of the far-horizon search
+    refine_fov: bool = False  # a given fov is only a start (e.g. from EXIF): refinement fits the focal length too
     score: ScoreParams = field(default_factory=ScoreParams)
 
 
@@ -300,7 +301,7 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
         # once a pose is accepted, the confirming chunks refine new three-point candidates only:
         # the far-horizon ones are the same in every chunk and their best have been refined
         for cand in _next_to_refine(candidates, params.refine_per_chunk, params, horizons=accepted is None):
-            _refine(cand, terrain, intrinsics, height, sky, weights, fov is None, params, stats)
+            _refine(cand, terrain, intrinsics, height, sky, weights, fov is None or params.refine_fov, params, stats)
         stats.add_time("refinement", time.perf_counter() - tick)
         done = [c for c in candidates if c.refined is not None]
         good = [c for c in done if c.refined.score <= params.accept_score_px
@@ -312,7 +313,7 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     tick = time.perf_counter()
     final = params.final_refinements if accepted is None else 0
     for cand in _next_to_refine(candidates, final, params, budgeted=False):
-        _refine(cand, terrain, intrinsics, height, sky, weights, fov is None, params, stats)
+        _refine(cand, terrain, intrinsics, height, sky, weights, fov is None or params.refine_fov, params, stats)
     stats.add_time("refinement", time.perf_counter() - tick)
     done = sorted([c for c in candidates if c.refined is not None], key=lambda c: c.refined.score)
     if not done:

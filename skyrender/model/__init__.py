@@ -6,7 +6,9 @@ and :func:`load_model` keep it in a versioned ``MODEL_DIR``.
 
 from __future__ import annotations
 
+import os
 import time
+from pathlib import Path
 
 from ..dem import DEM
 from ..errors import InputError
@@ -16,7 +18,7 @@ from .horizons import HorizonParams, Horizons, build_horizons
 from .neighbours import k_nearest_features
 from .peaks import PeakParams, PeakTable, find_peaks
 
-__all__ = ["build_model", "Model", "ModelParams", "PeakParams", "CovisibilityParams", "load_model", "save_model",
+__all__ = ["build_model", "cached_model", "Model", "ModelParams", "PeakParams", "CovisibilityParams", "load_model", "save_model",
            "find_peaks", "k_nearest_features", "learn_covisibility", "PeakTable", "Covisibility", "HorizonParams",
            "Horizons", "build_horizons"]
 
@@ -41,3 +43,24 @@ def build_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None, 
     covis = learn_covisibility(terrain, features.xyz, params.covisibility, progress=progress)
     horizons = build_horizons(terrain, params.horizons)
     return Model(dem, params, features, neighbours, covis, horizons, time.perf_counter() - t0)
+
+
+def model_cache_dir() -> Path:
+    """Where built models are cached: ``$SKYRENDER_CACHE`` or ``~/.cache/skyrender``."""
+    return Path(os.environ.get("SKYRENDER_CACHE", Path.home() / ".cache" / "skyrender"))
+
+
+def cached_model(dem: DEM, *, terrain=None) -> Model:
+    """The model of ``dem`` from the cache (keyed by the DEM's fingerprint), built and
+    cached on first use; an unwritable cache only costs the rebuild next time."""
+    cache = model_cache_dir() / dem.fingerprint()
+    try:
+        return load_model(cache, dem=dem)
+    except InputError:
+        pass
+    built = build_model(dem, terrain=terrain)
+    try:
+        save_model(built, cache)
+    except InputError:
+        pass
+    return built

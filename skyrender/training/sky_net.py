@@ -3,11 +3,12 @@
 ``python -m skyrender.training.sky_net [--steps 3000] [--seed 0]`` (``make train-sky-net``)
 
 Data: the *training* side of the fixed split (``experiments/photos/split.json``: CH1
-photos of the training places and web001-web044) and renders with varied skies
+photos of the largest training place and web001-web034; the dev and validation sides
+are never read) and renders with varied skies
 (:func:`skyrender.training.synthetic_skies.training_renders`: sunset silhouettes,
 overcast, haze, clouds on ridges, snow, power lines, occluders). Validation photos are
-never read. Each step takes one picture at a random width (384-640 px), flipped at
-random, with random exposure, white balance, gamma, saturation, haze veil, contrast and noise; the loss
+never read. Each step takes one picture at a random width (352-544 px), flipped at
+random, with random exposure, white balance, gamma, saturation and noise; the loss
 is the binary cross-entropy at half resolution, weighted 5x within 3 px of the
 boundary, and 0 where the truth is unknown (Web columns with no red mark).
 
@@ -27,8 +28,8 @@ import numpy as np
 from ..datasets.real_photos import items_on_side
 from ..features.sky_net import STRIDE, WEIGHTS, net_input
 
-TRAIN_WIDTHS = (384, 640)  # random input width per step (multiples of STRIDE)
-PRELOAD_WIDTH = 768
+TRAIN_WIDTHS = (352, 544)  # random input width per step (multiples of STRIDE)
+PRELOAD_WIDTH = 640
 
 
 def build_model():
@@ -106,10 +107,6 @@ def augment(image: np.ndarray, sky: np.ndarray, rng: np.random.Generator):
         img, lab, known = img[:, ::-1], lab[:, ::-1], known[:, ::-1]
     grey = img.mean(axis=2, keepdims=True)
     img = grey + (img - grey) * rng.uniform(0.6, 1.4)  # saturation
-    if rng.random() < 0.5:  # haze: a veil of the sky's colour, and less contrast (pale distant ridges)
-        veil = img[: max(1, h // 10)].reshape(-1, 3).mean(axis=0)
-        img = img + (veil - img) * rng.uniform(0.0, 0.4)
-        img = img.mean() + (img - img.mean()) * rng.uniform(0.6, 1.0)
     img = img * rng.uniform(0.85, 1.15, size=3) * rng.uniform(0.7, 1.3)  # white balance, exposure
     img = np.clip(img, 0, 1) ** rng.uniform(0.7, 1.4)
     img = img + rng.normal(0, rng.uniform(0, 0.02), img.shape)
@@ -127,11 +124,11 @@ def boundary_weight(sky: np.ndarray, known: np.ndarray, reach: int = 3, gain: fl
     return np.where(known, 1.0 + gain * near, 0.0).astype(np.float32)
 
 
-def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: int = 100) -> dict:
+def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: int = 100, threads: int = 2) -> dict:
     import torch
 
     torch.manual_seed(seed)
-    torch.set_num_threads(max(1, min(2, os.cpu_count() or 1)))
+    torch.set_num_threads(threads)
     rng = np.random.default_rng(seed)
     data = load_training_set(renders, seed)
     model = build_model()
@@ -164,7 +161,7 @@ def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: in
         warnings.simplefilter("ignore")
         torch.onnx.export(model, example, out, dynamo=False, input_names=["x"], output_names=["logits"],
                           dynamic_axes={"x": {2: "h", 3: "w"}, "logits": {2: "h2", 3: "w2"}}, opset_version=17)
-    log = {"seed": seed, "steps": steps, "renders": renders, "photos": len(data) - renders,
+    log = {"seed": seed, "steps": steps, "renders": renders, "threads": threads, "photos": len(data) - renders,
            "train_widths": TRAIN_WIDTHS, "torch": torch.__version__, "curve": curve,
            "seconds": round(time.perf_counter() - t0, 1)}
     with open(os.path.splitext(out)[0] + ".json", "w") as f:
@@ -177,9 +174,10 @@ def main(argv=None) -> int:
     parser.add_argument("--steps", type=int, default=3000)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--renders", type=int, default=60, help="synthetic training renders with varied skies")
+    parser.add_argument("--threads", type=int, default=2, help="PyTorch CPU threads (results depend on it)")
     parser.add_argument("--out", default=WEIGHTS)
     args = parser.parse_args(argv)
-    log = train(args.steps, args.seed, args.renders, args.out)
+    log = train(args.steps, args.seed, args.renders, args.out, threads=args.threads)
     print(f"wrote {args.out} ({log['photos']} photos, {log['renders']} renders, {log['seconds']:.0f} s)")
     return 0
 

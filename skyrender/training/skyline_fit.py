@@ -1,7 +1,8 @@
 """Fit the boundary search and the column confidence of the learned extractor.
 
 ``python -m skyrender.training.skyline_fit`` (``make train-sky-net`` runs it after the
-network) — on the *training* photos of the fixed split only:
+network) — on the *dev* photos of the fixed split only (training places and Web photos
+the network was not trained on; never the validation side):
 
 1. the dynamic programme's weights with the network's probability (edge bonus, jump
    cost, jump cap) by grid search, maximising the mean share of columns within 5 px;
@@ -9,9 +10,8 @@ network) — on the *training* photos of the fixed split only:
    :func:`skyrender.features.skyline.confidence_features`, written to
    ``skyrender/features/weights/sky_net_fit.json`` (read by the extractor).
 
-The network has seen these photos, so its probabilities are sharper on them than on new
-ones; the fitted confidence ranks columns (measured on the validation side by
-``make bench-skyline``) rather than being a calibrated probability.
+The network has not seen these photos, so the fitted confidence is a probability for
+photos like them; ``make bench-skyline`` measures it on the validation side.
 """
 
 from __future__ import annotations
@@ -32,19 +32,20 @@ JUMP_COST = (0.1, 0.25, 0.5)
 JUMP_CAP = (6.0, 12.0, 24.0)
 
 
-def prepared(photos: int):
-    """(features, P(sky), truth) of up to ``photos`` training photos, evenly spread."""
+def prepared(photos: int, weights: str | None = None):
+    """(features, P(sky), truth) of up to ``photos`` dev photos, evenly spread."""
     import cv2
 
     from ..features.photo_io import load_photo
 
-    items = items_on_side("train")
+    items = items_on_side("dev")
     step = max(1, len(items) // photos) if photos else 1
     out = []
     for it in items[::step]:
         image = load_photo(it.image_path)
         H, W = image.shape[:2]
-        logits = cv2.resize(sky_logits(image), (W, H), interpolation=cv2.INTER_LINEAR)
+        logits = cv2.resize(sky_logits(image, weights=weights) if weights else sky_logits(image), (W, H),
+                            interpolation=cv2.INTER_LINEAR)
         p = (1.0 / (1.0 + np.exp(-np.clip(logits, -30, 30)))).astype(np.float32)
         out.append((pixel_features(image), p, it.truth_skyline()))
     return out
@@ -56,10 +57,10 @@ def within5(skyline: np.ndarray, truth: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(e), e, 1e6) <= 5
 
 
-def fit(photos: int = 60) -> dict:
+def fit(photos: int = 0, weights: str | None = None, write: bool = True) -> dict:
     from sklearn.linear_model import LogisticRegression
 
-    data = prepared(photos)
+    data = prepared(photos, weights)
     best = None
     for edge, cost, cap in itertools.product(EDGE_BONUS, JUMP_COST, JUMP_CAP):
         scores = []
@@ -69,7 +70,7 @@ def fit(photos: int = 60) -> dict:
             H = p.shape[0]
             scores.append(np.mean(within5(np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub)), truth)))
         score = float(np.mean(scores))
-        print(f"edge {edge:5.1f} jump {cost:4.2f} cap {cap:4.1f}: mean within 5 px {100 * score:.2f} %", flush=True)
+        print(f"edge {edge:5.1f} jump {cost:4.2f} cap {cap:4.1f}: dev mean within 5 px {100 * score:.2f} %", flush=True)
         if best is None or score > best[0]:
             best = (score, edge, cost, cap)
     score, edge, cost, cap = best
@@ -84,23 +85,26 @@ def fit(photos: int = 60) -> dict:
         ys.append(within5(skyline, truth))
     x, y = np.concatenate(xs), np.concatenate(ys)
     model = LogisticRegression(C=1.0, max_iter=1000).fit(x, y) if len(set(y.tolist())) > 1 else None
-    result = {"net_edge_bonus": edge, "net_jump_cost": cost, "net_jump_cap": cap, "train_mean_within5": score,
+    result = {"net_edge_bonus": edge, "net_jump_cost": cost, "net_jump_cap": cap, "dev_mean_within5": score,
               "photos": len(data), "columns": int(len(y)), "columns_within5": float(np.mean(y)),
               "coef": model.coef_[0].tolist() if model else [0.0, 0.0, 0.0, 0.0],
               "intercept": float(model.intercept_[0]) if model else 10.0,
               "features": ["margin", "contrast/15", "roughness px", "1-|2p-1|"]}
-    with open(FITTED, "w") as f:
-        json.dump(result, f, indent=1)
+    if write:
+        with open(FITTED, "w") as f:
+            json.dump(result, f, indent=1)
     return result
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--photos", type=int, default=60, help="training photos used (evenly spread)")
+    parser.add_argument("--photos", type=int, default=0, help="at most this many dev photos (0: all)")
+    parser.add_argument("--weights", default=None, help="another network's ONNX file (to compare set-ups)")
+    parser.add_argument("--dry-run", action="store_true", help="print, do not write the fitted file")
     args = parser.parse_args(argv)
-    r = fit(args.photos)
+    r = fit(args.photos, args.weights, write=not args.dry_run)
     print(f"best: edge bonus {r['net_edge_bonus']}, jump cost {r['net_jump_cost']}, jump cap {r['net_jump_cap']} "
-          f"(training mean within 5 px {100 * r['train_mean_within5']:.2f} %) and the confidence model -> {FITTED}")
+          f"(dev mean within 5 px {100 * r['dev_mean_within5']:.2f} %)" + ("" if args.dry_run else f"; written to {FITTED}"))
     return 0
 
 

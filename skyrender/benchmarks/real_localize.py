@@ -1,0 +1,134 @@
+"""Localization of real photographs (CH1) against a >= 1 degree SRTM mosaic around them.
+
+``python -m skyrender.benchmarks.real_localize [--side validation] [--limit N]
+[--fov known unknown] [--out experiments/ch1]`` (``make bench-real``)
+
+Per photo: the DEM is the mosaic of the SRTM3 tiles around its place, cropped to
+1.2 deg of latitude x 1.4 deg of longitude centred on the place (the mean camera
+position of the photos taken there, rounded to 0.1 deg), so the photos of one place
+share one model (built once and cached). The photo is localized with no prior, the
+camera 2 m above ground, its skyline extracted by the learned extractor, the fov
+given (``known``: from its focal length) or not (``unknown``). Reported per photo:
+error of the position (m), status, confidence, seconds (extraction included, model
+building not); and recall at 100 m / 250 m / 1 km, abstentions and confident answers
+more than 1 km wrong.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import numpy as np
+
+from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
+from ..diagnostics.oracle import DEM_DIR, tiles_around
+from .skyline_photos import git_commit
+
+HALF_LAT, HALF_LON = 0.6, 0.7  # degrees either side of the place's centre
+RECALL_M = (100.0, 250.0, 1000.0)
+
+
+def place_window(lat: float, lon: float) -> tuple[float, float, float, float]:
+    """(west, south, east, north) degrees of the search area around a place."""
+    clat, clon = round(lat, 1), round(lon, 1)
+    return clon - HALF_LON, clat - HALF_LAT, clon + HALF_LON, clat + HALF_LAT
+
+
+def run(items, fov_modes: list[str], progress: bool = True) -> list[dict]:
+    from ..dem import load_dem
+    from ..features import extract_skyline, load_photo
+    from ..localizer import localize
+    from ..model import cached_model
+    from ..render import Terrain
+
+    with open(os.path.join(REPO, "experiments", "photos", "split.json")) as f:
+        place_of = {k: v["place"] for k, v in json.load(f)["photos"].items()}
+    centres: dict[str, list] = {}
+    for it in items:
+        centres.setdefault(place_of[it.key], []).append((it.lat, it.lon))
+    loaded: dict[str, tuple] = {}
+    rows = []
+    for n, it in enumerate(items):
+        place = place_of[it.key]
+        if place not in loaded:
+            lat, lon = np.mean(centres[place], axis=0)
+            window = place_window(lat, lon)
+            t = time.perf_counter()
+            dem = load_dem(tiles_around(lat, lon, DEM_DIR), bounds=window)
+            terrain = Terrain(dem)
+            model = cached_model(dem, terrain=terrain)
+            loaded.clear()  # one place's model in memory at a time
+            loaded[place] = (dem, terrain, model, time.perf_counter() - t, window)
+        dem, terrain, model, model_seconds, window = loaded[place]
+        tx, ty = (float(v) for v in dem.from_lonlat(it.lon, it.lat))
+        for mode in fov_modes:
+            t = time.perf_counter()
+            image = load_photo(it.image_path)
+            skyline = extract_skyline(image)
+            fov = float(np.degrees(2 * np.arctan(image.shape[1] / (2 * it.focal_px)))) if mode == "known" else None
+            result = localize(image, model, 2.0, fov, terrain=terrain, skyline=skyline)
+            seconds = time.perf_counter() - t
+            row = {"photo": it.key, "fov_mode": mode, "status": result.status, "confidence": result.confidence,
+                   "seconds": seconds, "model_seconds": model_seconds, "window": window,
+                   "stage_seconds": result.stats.to_dict()["seconds"]}
+            if result.localized:
+                row["error_m"] = float(np.hypot(result.pose[0] - tx, result.pose[1] - ty))
+                row["fov"] = result.fov
+            rows.append(row)
+            if progress:
+                err = f"{row['error_m']:.0f} m" if "error_m" in row else "-"
+                print(f"  [{n + 1}/{len(items)}] {it.key} ({mode} fov): {row['status']}, error {err}, "
+                      f"confidence {row['confidence']:.2f}, {seconds:.1f} s", flush=True)
+    return rows
+
+
+def summary(rows: list[dict]) -> dict:
+    n = len(rows)
+    err = np.array([r.get("error_m", np.inf) for r in rows])
+    out = {"photos": n, "abstained": int(sum(r["status"] != "localized" for r in rows)),
+           "wrong_over_1km": int(np.sum(np.isfinite(err) & (err > 1000))),
+           "median_seconds": float(np.median([r["seconds"] for r in rows])) if n else None}
+    for m in RECALL_M:
+        out[f"recall_{int(m)}m"] = float(np.mean(err <= m)) if n else 0.0
+    return out
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--side", default="validation", choices=["train", "validation"])
+    parser.add_argument("--limit", type=int, default=0, help="at most N photos, spread over the side's places")
+    parser.add_argument("--fov", nargs="+", default=["known", "unknown"], choices=["known", "unknown"])
+    parser.add_argument("--out", default=os.path.join(REPO, "experiments", "ch1"))
+    args = parser.parse_args(argv)
+    if not os.path.isdir(DEFAULT_PHOTOS):
+        print(f"no photos at {DEFAULT_PHOTOS}")
+        return 2
+    items = [it for it in items_on_side(args.side) if it.key.startswith("ch1/")]
+    if args.limit:
+        items = items[:: max(1, len(items) // args.limit)][: args.limit]
+    rows = run(items, args.fov)
+    report = {"commit": git_commit(), "cpus": os.cpu_count(), "side": args.side, "photos": rows,
+              "summary": {m: summary([r for r in rows if r["fov_mode"] == m]) for m in args.fov}}
+    lines = [f"{'photo':36s} {'fov':8s} {'status':10s} {'error m':>9s} {'conf':>5s} {'s':>6s}"]
+    for r in rows:
+        err = f"{r['error_m']:9.0f}" if "error_m" in r else f"{'-':>9s}"
+        lines.append(f"{r['photo']:36s} {r['fov_mode']:8s} {r['status']:10s} {err} {r['confidence']:5.2f} {r['seconds']:6.1f}")
+    for m, s in report["summary"].items():
+        lines.append(f"{m} fov: {s['photos']} photos; within 100 m {100 * s['recall_100m']:.0f} %, 250 m "
+                     f"{100 * s['recall_250m']:.0f} %, 1 km {100 * s['recall_1000m']:.0f} %; abstained {s['abstained']}; "
+                     f"confident and > 1 km wrong {s['wrong_over_1km']}; median {s['median_seconds']:.1f} s")
+    text = "\n".join(lines)
+    print(text)
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, f"bench-real-{args.side}.json"), "w") as f:
+        json.dump(report, f, indent=1)
+    with open(os.path.join(args.out, f"bench-real-{args.side}.txt"), "w") as f:
+        f.write(f"commit {report['commit']}, {report['cpus']} CPUs, side {args.side}\n\n{text}\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
