@@ -87,18 +87,23 @@ def mitsuba(variant: str | None = None):
     """Import Mitsuba with a working variant set, and return the module.
 
     The first call decides the variant; later calls with no argument reuse it.
-    A requested LLVM/CUDA variant that cannot run falls back (with a warning)
-    to the LLVM variant or to ``scalar_rgb`` instead of failing.
+    The default variant falls back (with a one-line warning) to ``scalar_rgb`` when it
+    cannot run; a variant asked for explicitly (``--variant`` or ``SKYRENDER_VARIANT``)
+    that cannot run is an InputError instead of a silent change of backend.
     """
     global _active_variant
     if variant is None and _active_variant is not None:
         import mitsuba as mi
 
         return mi
+    explicit = variant is not None or bool(os.environ.get("SKYRENDER_VARIANT"))
     name = requested_variant(variant)
     if name.startswith("llvm"):
         lib = find_libllvm()
         if lib is None:
+            if explicit:
+                raise InputError(f"Mitsuba variant {name} cannot run here: no libLLVM >= {MIN_LLVM_MAJOR} found "
+                                 f"(install libllvm19), or choose --variant {FALLBACK_VARIANT}")
             _warn(
                 f"no libLLVM >= {MIN_LLVM_MAJOR} found (install libllvm19); "
                 f"using the slow {FALLBACK_VARIANT} variant"
@@ -110,13 +115,12 @@ def mitsuba(variant: str | None = None):
 
     try:
         mi.set_variant(name)
-    except Exception as exc:  # an unavailable backend: degrade, don't die
-        fallback = DEFAULT_VARIANT if name.startswith("cuda") else FALLBACK_VARIANT
-        _warn(f"Mitsuba variant {name} unavailable ({str(exc).splitlines()[0]}); using {fallback}")
-        if fallback.startswith("llvm") and find_libllvm() is None:
-            fallback = FALLBACK_VARIANT
-        elif fallback.startswith("llvm"):
-            os.environ["DRJIT_LIBLLVM_PATH"] = find_libllvm()
+    except Exception as exc:  # an unavailable backend: refuse what was asked for, degrade the default
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        if explicit:
+            raise InputError(f"Mitsuba variant {name} cannot run here ({reason})") from None
+        fallback = FALLBACK_VARIANT
+        _warn(f"Mitsuba variant {name} unavailable ({reason}); using {fallback}")
         mi.set_variant(fallback)
         name = fallback
     _active_variant = name

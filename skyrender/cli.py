@@ -90,10 +90,15 @@ def render(
         raise InputError(f"--sky must be one of {', '.join(SKY_TYPES)}, got {sky!r}")
     for name, value, lo, hi in (("--noise", noise, 0, 1), ("--occluders", occluders, 0, 1),
                                 ("--clouds", clouds, 0, 1), ("--power-lines", power_lines, 0, 50),
+                                ("--seed", seed, 0, 2**32 - 1),
                                 ("--supersample", supersample, 1, 8), ("--haze", haze, 1e-6, float("inf"))):
         if not lo <= value <= hi:
             raise InputError(f"{name} must lie in [{lo}, {hi}], got {value}")
-    _check_writable(out, "--out")
+    _check_writable(out, "--out", IMAGE_SUFFIXES)
+    if overlay is not None:
+        _check_writable(overlay, "--overlay", IMAGE_SUFFIXES)
+    if skyline_out is not None:
+        _check_writable(skyline_out, "--skyline-out", SKYLINE_SUFFIXES)
     terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
     if (lat is None) != (lon is None) or (lat is not None and (x is not None or y is not None)):
         raise InputError("give the position as --x and --y, or as --lat and --lon")
@@ -139,9 +144,9 @@ def skyline(
         raise InputError(f"--peaks must be >= 0, got {peaks}")
     if method not in ("net", "gmm"):
         raise InputError(f"--method must be net or gmm, got {method!r}")
-    for path, option in ((out, "--out"), (overlay, "--overlay")):
+    for path, option, kinds in ((out, "--out", SKYLINE_SUFFIXES), (overlay, "--overlay", IMAGE_SUFFIXES)):
         if path is not None:
-            _check_writable(path, option)
+            _check_writable(path, option, kinds)
     photo = load_photo(image)
     result = extract_skyline(photo, SkylineParams(method=method))
     if out is not None:
@@ -250,9 +255,9 @@ def localize(
         raise InputError(f"--height must be >= 0 m, got {height}")
     if fov is not None and not (0 < fov < 180):
         raise InputError(f"--fov must lie in (0, 180) degrees, got {fov}")
-    for path, option in ((overlay, "--overlay"), (geojson, "--geojson")):
+    for path, option, kinds in ((overlay, "--overlay", IMAGE_SUFFIXES), (geojson, "--geojson", (".geojson", ".json"))):
         if path is not None:
-            _check_writable(path, option)
+            _check_writable(path, option, kinds)
     prior = _parse_prior(prior_peak, prior_near)
     photo = load_photo(image)
     from_exif = exif_fov(str(image)) if fov is None else None
@@ -323,7 +328,16 @@ def _check_model_dir(path: Path) -> None:
         raise InputError(f"--out: {path} is not writable")
 
 
-def _check_writable(path: Path, option: str) -> None:
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp")
+SKYLINE_SUFFIXES = (".npy", ".json")
+
+
+def _check_writable(path: Path, option: str, suffixes: tuple[str, ...] | None = None) -> None:
+    """Fail before any work when an output cannot be written (or has the wrong kind of name)."""
+    if suffixes and path.suffix.lower() not in suffixes:
+        raise InputError(f"{option} {path}: the name must end in {', '.join(suffixes)}")
+    if path.is_dir():
+        raise InputError(f"{option} {path} is a directory")
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise InputError(f"{option}: directory {parent} does not exist")

@@ -136,3 +136,57 @@ def test_the_oracle_fit_of_a_ch1_photo_at_its_true_position():
     assert row["median_px"] < 5.0
     assert 8.0 < row["tilt"] < 20.0
     assert sum(v["columns"] for v in row["by_distance"].values()) > 900
+
+
+@pytest.fixture(scope="module")
+def validation_extractions():
+    """(column errors, confidences with truth) of the learned extractor on every validation photo."""
+    from skyrender.benchmarks.skyline_photos import column_errors
+    from skyrender.datasets.real_photos import items_on_side
+    from skyrender.features import extract_skyline
+
+    items = items_on_side("validation", str(data_path("photos")))
+    out = []
+    for it in items:
+        truth = it.truth_skyline()
+        result = extract_skyline(load_photo(it.image_path))
+        out.append((column_errors(result.skyline, truth), result.confidence[np.isfinite(truth)]))
+    return out
+
+
+def test_the_learned_extractor_on_photos_it_was_not_fitted_on(validation_extractions):
+    from skyrender.benchmarks.skyline_photos import meets_target
+
+    within5 = np.array([np.mean(e <= 5) for e, _ in validation_extractions])
+    met = np.mean([meets_target(np.median(e), w) for (e, _), w in zip(validation_extractions, within5)])
+    assert len(validation_extractions) == 80
+    # make bench-skyline reports (validation side): VALIDATION_FIGURES
+    assert within5.mean() >= MEAN_WITHIN5_FLOOR
+    assert met >= MET_SHARE_FLOOR
+
+
+def test_confident_columns_are_right_more_often(validation_extractions):
+    e = np.concatenate([e for e, _ in validation_extractions])
+    c = np.concatenate([c for _, c in validation_extractions])
+    sure, unsure = e[c >= 0.5], e[c < 0.5]
+    assert np.mean(sure <= 5) > np.mean(unsure <= 5) + 0.2
+    assert np.mean(sure <= 5) >= 0.9
+
+
+def test_a_twelve_megapixel_photo_is_extracted_on_a_reduced_copy_in_full_coordinates():
+    import cv2
+
+    from skyrender.benchmarks.skyline_photos import column_errors
+    from skyrender.datasets.real_photos import items_on_side
+    from skyrender.features import extract_skyline
+
+    it = next(i for i in items_on_side("validation", str(data_path("photos"))) if i.key == "ch1/dsc05274_01024")
+    image = load_photo(it.image_path)
+    big = cv2.resize(image, (4096, 3072), interpolation=cv2.INTER_CUBIC)
+    truth = it.truth_skyline()
+    small_e = column_errors(extract_skyline(image).skyline, truth)
+    result = extract_skyline(big)
+    assert result.skyline.shape == (4096,) and result.sky_probability.shape == (3072, 4096)
+    big_e = column_errors(result.skyline, np.repeat(truth, 4) * 4) / 4  # in 1024-px units
+    assert np.median(big_e) <= np.median(small_e) + 0.5
+    assert np.mean(big_e <= 5) >= np.mean(small_e <= 5) - 0.02

@@ -139,7 +139,7 @@ def _load_mosaic(paths: list[str], *, crs, resolution: float | None, bounds=None
 
 def _load_raster(path: str, *, crs, resolution: float | None) -> DEM:
     import rasterio
-    from rasterio.errors import RasterioIOError
+    from rasterio.errors import RasterioError, RasterioIOError
 
     try:
         with rasterio.open(path) as src:
@@ -150,7 +150,9 @@ def _load_raster(path: str, *, crs, resolution: float | None) -> DEM:
             file_crs = src.crs
     except InputError:
         raise
-    except (RasterioIOError, Exception) as exc:
+    except MemoryError:
+        raise InputError(f"{path}: the DEM is too large to read into memory") from None
+    except (RasterioIOError, RasterioError, ValueError, OSError) as exc:
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise InputError(f"{path}: not a DEM that can be read ({first})") from None
     if not np.issubdtype(band.dtype, np.number) or band.ndim != 2:

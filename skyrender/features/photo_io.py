@@ -31,10 +31,25 @@ def load_photo(path) -> np.ndarray:
         data = np.fromfile(path, dtype=np.uint8)
     except OSError as exc:
         raise InputError(f"{path}: cannot read the image ({exc.strerror or exc})") from None
+    _check_complete(data, path)
     image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
     if image is None:
         raise InputError(f"{path}: not an image that can be read")
     return upright(as_rgb8(image, name=path, bgr=True), exif_orientation(path))
+
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _check_complete(data: np.ndarray, path: str) -> None:
+    """InputError for a PNG or JPEG file cut off before its end marker (IEND, EOI): the
+    decoder would print its own complaint on stderr and return half an image."""
+    head = data[:8].tobytes()
+    tail = data[-1024:].tobytes()
+    if head == PNG_SIGNATURE and b"IEND" not in tail:
+        raise InputError(f"{path}: truncated PNG file (no IEND chunk)")
+    if head[:2] == b"\xff\xd8" and b"\xff\xd9" not in tail:
+        raise InputError(f"{path}: truncated JPEG file (no end-of-image marker)")
 
 
 # EXIF Orientation tag value -> (rotations by 90 degrees counter-clockwise, then flip left-right)

@@ -154,23 +154,34 @@ def load_model(model_dir, dem: DEM | None = None, params: ModelParams | None = N
         raise InputError(f"{model_dir} is not a skyrender model (no model.json); build one with 'skyrender model'") from None
     except (OSError, ValueError) as exc:
         raise InputError(f"cannot read model {meta_path}: {exc}") from None
-    if meta.get("format") != FORMAT:
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
         raise InputError(f"{model_dir} is not a skyrender model")
     if meta.get("format_version") != FORMAT_VERSION:
         raise InputError(f"model {model_dir} has format version {meta.get('format_version')}, this skyrender reads "
                          f"{FORMAT_VERSION}: rebuild it with 'skyrender model'")
-    stored = ModelParams.from_dict(meta["params"])
+    try:
+        stored = ModelParams.from_dict(meta["params"])
+        meta["dem"]["fingerprint"], meta["dem"]["name"], meta["counts"]["viewpoints"]
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InputError(f"model {model_dir} is corrupt: model.json lacks or garbles {exc}") from None
     if params is not None and stored != params:
         raise InputError(f"model {model_dir} was built with other parameters: rebuild it with 'skyrender model'")
     if dem is not None and dem.fingerprint() != meta["dem"]["fingerprint"]:
         raise InputError(f"model {model_dir} was built for DEM {meta['dem']['name']!r} "
                          f"(fingerprint {meta['dem']['fingerprint']}), not for {dem.name!r} ({dem.fingerprint()}): "
                          f"rebuild it with 'skyrender model'")
+    import zipfile
+
     try:
         a = np.load(os.path.join(model_dir, "arrays.npz"), allow_pickle=False)
         arrays = {k: a[k] for k in a.files}
-    except (OSError, ValueError) as exc:
-        raise InputError(f"cannot read model arrays in {model_dir}: {exc}") from None
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise InputError(f"cannot read model arrays in {model_dir}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
+    required = ("id", "x", "y", "z", "row", "col", "prominence", "major", "together", "horizon_centres",
+                "horizon_elevation", "neighbours") + (() if dem is not None else ("elevation",))
+    missing = [k for k in required if k not in arrays]
+    if missing:
+        raise InputError(f"model {model_dir} is corrupt: arrays.npz lacks {', '.join(missing)}")
     if dem is None:
         d = meta["dem"]
         dem = DEM(arrays["elevation"], Affine(*d["transform"]), d["crs"], d["name"])
