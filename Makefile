@@ -43,7 +43,7 @@ bench-localize: install
 # reproduces skyrender/features/weights/ for the seed
 train-sky-net: install
 	$(BIN)/python -m pip install -q -e '.[dev,train]'
-	$(BIN)/python -m skyrender.training.sky_net --steps 4000 --seed 0 --renders 60 --threads 1
+	$(BIN)/python -m skyrender.training.sky_net --steps 4000 --seed 0 --renders 0 --threads 1
 	$(BIN)/python -m skyrender.training.skyline_fit
 
 bench-render: install

@@ -133,7 +133,7 @@ def skyline(
     overlay: Optional[Path] = typer.Option(None, "--overlay", help="write the photo with the skyline drawn"),
     peaks: int = typer.Option(6, "--peaks", help="skyline peaks to report (with --json)"),
     json_out: bool = typer.Option(False, "--json", help="print {width, height, skyline} as one JSON object"),
-    method: str = typer.Option("net", "--method", help="net (learned, default) or gmm (per-photo colour mixtures)"),
+    method: str = typer.Option("gmm", "--method", help="gmm (per-photo colour mixtures, default) or net (learned)"),
 ):
     """Extract the skyline (sky/terrain boundary per column) from a photograph."""
     from .features import SkylineParams, extract_skyline, load_photo, skyline_peaks

@@ -102,3 +102,60 @@ def test_installed_console_script_exits_2_on_a_missing_dem(tmp_path):
     assert proc.returncode == 2
     assert proc.stdout == ""
     assert proc.stderr.strip().count("\n") == 0 and "not found" in proc.stderr
+
+
+BUILTIN_RENDER = ["render", "--dem", "builtin:jacksboro", "--lat", "36.54386", "--lon", "-84.29994", "--height", "2",
+                  "--pan", "135", "--tilt", "3", "--swing", "0", "--fov", "60", "--size", "64x48"]
+
+
+def _one_line_error(capsys, code):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and err[0].startswith("skyrender: error:"), err
+    return err[0]
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--seed", "-1"], "--seed"),
+    (["--skyline-out", "{tmp}/sky.txt"], "--skyline-out"),
+    (["--overlay", "{tmp}/overlay.npy"], "--overlay"),
+    (["--sky", "purple"], "--sky"),
+    (["--clouds", "2"], "--clouds"),
+])
+def test_render_refuses_bad_values_and_output_names_before_any_work(extra, words, tmp_path, capsys):
+    extra = [e.format(tmp=tmp_path) for e in extra]
+    out = tmp_path / "view.png"
+    code = main(BUILTIN_RENDER + ["--out", str(out)] + extra)
+    assert words in _one_line_error(capsys, code)
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_an_explicit_variant_that_cannot_run_is_refused(tmp_path):
+    import shutil
+
+    if shutil.which("nvidia-smi"):
+        pytest.skip("this machine has an NVIDIA GPU: cuda_ad_rgb may run")
+    proc = subprocess.run([sys.executable, "-m", "skyrender.cli"] + BUILTIN_RENDER +
+                          ["--out", str(tmp_path / "v.png"), "--variant", "cuda_ad_rgb"],
+                          capture_output=True, text=True, timeout=300)
+    err = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(err) == 1 and "cuda_ad_rgb" in err[0], proc.stderr
+
+
+def test_a_truncated_png_gives_one_line(tmp_path, capsys):
+    import cv2
+
+    path = tmp_path / "cut.png"
+    ok, buf = cv2.imencode(".png", np.random.default_rng(0).integers(0, 255, (60, 80, 3), dtype=np.uint8))
+    path.write_bytes(buf.tobytes()[: len(buf) // 2])
+    assert "truncated" in _one_line_error(capsys, main(["skyline", str(path)]))
+
+
+def test_a_corrupt_model_directory_gives_one_line(tmp_path, capsys):
+    (tmp_path / "model.json").write_text(json.dumps({"format": "skyrender-model"}))
+    (tmp_path / "arrays.npz").write_bytes(b"PK\x03\x04 not a zip")
+    img = tmp_path / "p.png"
+    import cv2
+
+    cv2.imwrite(str(img), np.zeros((48, 64, 3), np.uint8))
+    code = main(["localize", str(img), "--model", str(tmp_path), "--height", "2"])
+    _one_line_error(capsys, code)

@@ -143,23 +143,24 @@ def format_table(rows: list[dict], methods: list[str]) -> str:
 
 
 def speed(items, repeats: int = 3) -> dict:
-    """Seconds of the learned extractor (median of ``repeats``, after a warm-up) on a
+    """Seconds of the learned extractor (``net``; median of ``repeats``, after a warm-up) on a
     1024-wide photo and on a 12-megapixel copy of it (4x up-scaled, 4096 x 3072), and the
     12-MP copy's median error against the 4x truth."""
     import cv2
 
-    from ..features import extract_skyline, load_photo
+    from ..features import SkylineParams, extract_skyline, load_photo
 
+    net = SkylineParams(method="net")
     it = next(i for i in items if i.key.startswith("ch1/"))
     image = load_photo(it.image_path)
     big = cv2.resize(image, (image.shape[1] * 4, image.shape[0] * 4), interpolation=cv2.INTER_CUBIC)
     out = {"photo": it.key}
     for name, img in (("1024", image), ("12mp", big)):
-        extract_skyline(img)
+        extract_skyline(img, net)
         times = []
         for _ in range(repeats):
             t = time.perf_counter()
-            result = extract_skyline(img)
+            result = extract_skyline(img, net)
             times.append(time.perf_counter() - t)
         scale = img.shape[1] / image.shape[1]
         e = column_errors(result.skyline, np.repeat(it.truth_skyline(), scale) * scale) / scale

@@ -138,7 +138,7 @@ def oracle_for_photo(item: PhotoItem, radius_km: float = 60.0) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--side", default="train", choices=["train", "validation"])
+    parser.add_argument("--side", default="train", choices=["train", "dev", "validation"])
     parser.add_argument("--limit", type=int, default=0)
     parser.add_argument("--radius-km", type=float, default=60.0)
     parser.add_argument("--out", default=os.path.join(REPO, "experiments", "ch1"))

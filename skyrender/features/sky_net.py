@@ -1,8 +1,8 @@
 """Learned per-pixel sky probability: a small fully convolutional network.
 
-A U-Net of about 150 k weights (``skyrender/features/weights/sky_net.onnx``,
+A U-Net of 230 k weights (``skyrender/features/weights/sky_net.onnx``,
 trained by :mod:`skyrender.training.sky_net` on the training split of the
-real photographs and on renders with varied skies) maps a photo, reduced to
+real photographs) maps a photo, reduced to
 :data:`NET_WIDTH` pixels wide, to P(sky) per pixel. Inference runs in OpenCV's
 DNN module on the CPU (already a dependency: no deep-learning stack to install).
 

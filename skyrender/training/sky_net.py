@@ -1,18 +1,18 @@
 """Train the sky network of :mod:`skyrender.features.sky_net` and export it to ONNX.
 
-``python -m skyrender.training.sky_net [--steps 3000] [--seed 0]`` (``make train-sky-net``)
+``python -m skyrender.training.sky_net [--steps 4000] [--seed 0] [--threads 1]`` (``make train-sky-net``)
 
 Data: the *training* side of the fixed split (``experiments/photos/split.json``: CH1
 photos of the largest training place and web001-web034; the dev and validation sides
-are never read) and renders with varied skies
+are never read) and, with ``--renders N``, renders with varied skies
 (:func:`skyrender.training.synthetic_skies.training_renders`: sunset silhouettes,
-overcast, haze, clouds on ridges, snow, power lines, occluders). Validation photos are
-never read. Each step takes one picture at a random width (352-544 px), flipped at
+overcast, haze, clouds on ridges, snow, power lines, occluders). The shipped weights use
+none: 60 renders lowered the dev figures (mean within 5 px 78.6 against 86.0 %). Each step takes one picture at a random width (352-544 px), flipped at
 random, with random exposure, white balance, gamma, saturation and noise; the loss
 is the binary cross-entropy at half resolution, weighted 5x within 3 px of the
 boundary, and 0 where the truth is unknown (Web columns with no red mark).
 
-Deterministic for a seed on one machine (PyTorch's CPU kernels, 2 threads). Writes
+Deterministic for a seed and thread count on one machine (PyTorch's CPU kernels). Writes
 the ONNX weights and ``sky_net.json`` (seed, steps, data counts, loss curve) beside them.
 """
 
@@ -171,10 +171,10 @@ def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: in
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--steps", type=int, default=3000)
+    parser.add_argument("--steps", type=int, default=4000)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--renders", type=int, default=60, help="synthetic training renders with varied skies")
-    parser.add_argument("--threads", type=int, default=2, help="PyTorch CPU threads (results depend on it)")
+    parser.add_argument("--renders", type=int, default=0, help="synthetic training renders with varied skies (60 lowered the dev figures: 78.6 against 86.0 %%)")
+    parser.add_argument("--threads", type=int, default=1, help="PyTorch CPU threads (results depend on it)")
     parser.add_argument("--out", default=WEIGHTS)
     args = parser.parse_args(argv)
     log = train(args.steps, args.seed, args.renders, args.out, threads=args.threads)

@@ -27,9 +27,9 @@ from ..features.skyline import (FITTED, _boundary, _subpixel, confidence_feature
 from ..features.sky import pixel_features
 from ..features.sky_net import sky_logits
 
-EDGE_BONUS = (0.0, 2.0, 4.0, 8.0, 16.0)
-JUMP_COST = (0.1, 0.25, 0.5)
-JUMP_CAP = (6.0, 12.0, 24.0)
+EDGE_BONUS = (16.0, 32.0, 64.0, 128.0)
+JUMP_COST = (0.5, 1.0, 2.0, 4.0)
+JUMP_CAP = (24.0, 48.0, 96.0)
 
 
 def prepared(photos: int, weights: str | None = None):
