@@ -222,7 +222,7 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
         raise ValueError(f"unknown skyline method {params.method!r} (net or gmm)")
     sub, contrast = _subpixel(features, rows)
     skyline = np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub))
-    return ExtractedSkyline(skyline, column_confidence(p, rows, contrast, skyline), p)
+    return ExtractedSkyline(skyline, column_confidence(p, rows, contrast, skyline, fitted=params.method == "net"), p)
 
 
 def _gmm_probability(features: np.ndarray, params: SkylineParams) -> np.ndarray:
@@ -290,14 +290,16 @@ def _fitted() -> dict:
         return {**DEFAULT_FIT, **json.load(f)}
 
 
-def column_confidence(p: np.ndarray, rows: np.ndarray, contrast: np.ndarray, skyline: np.ndarray) -> np.ndarray:
-    """(W,) in [0, 1]: the fitted probability that the column is within 5 px of the truth
-    (the product of margin and contrast where no fitted model ships)."""
+def column_confidence(p: np.ndarray, rows: np.ndarray, contrast: np.ndarray, skyline: np.ndarray,
+                      fitted: bool = True) -> np.ndarray:
+    """(W,) in [0, 1]. ``fitted`` (the network's probability): the probability, fitted on the
+    dev photos, that the column is within 5 px of the truth; otherwise (the per-photo
+    mixtures, or no fitted model shipped) the probability margin times the contrast / 15."""
     x = confidence_features(p, rows, contrast, skyline)
-    fitted = _fitted()
-    if fitted["coef"] is None:
+    model = _fitted()
+    if not fitted or model["coef"] is None:
         return np.clip(x[:, 0], 0, 1) * np.clip(x[:, 1], 0, 1)
-    return 1.0 / (1.0 + np.exp(-(x @ np.asarray(fitted["coef"]) + fitted["intercept"])))
+    return 1.0 / (1.0 + np.exp(-(x @ np.asarray(model["coef"]) + model["intercept"])))
 
 
 def _extract_reduced(image: np.ndarray, params: SkylineParams) -> ExtractedSkyline:
