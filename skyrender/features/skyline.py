@@ -9,9 +9,9 @@
    edge at the boundary, plus a truncated-linear penalty on jumps between
    neighbouring columns (poles and cliffs may jump, noise may not).
 3. Sub-pixel refinement from the colour profile across the boundary, and a
-   per-column confidence: a logistic model of "within 5 px of the truth" on the
-   probability margin, the colour contrast and the boundary's roughness, fitted
-   on the training photos (``weights/sky_net_confidence.json``).
+   per-column confidence: the probability margin times the colour contrast, or, with
+   the network, a logistic model of "within 5 px of the truth" on those and the
+   boundary's roughness, fitted on the dev photos (``weights/sky_net_fit.json``).
 
 Photos wider than :attr:`SkylineParams.work_width` (a 12-megapixel phone photo) are
 processed on a reduced copy; the boundary is then refined at full resolution in a
@@ -45,7 +45,7 @@ class SkylineParams:
     jump_cap: float = 12.0  # no jump costs more than this (vertical edges)
     edge_bonus: float = 16.0  # weight of the colour edge at the boundary
     edge_percentile: float = 97.0  # edges this strong or stronger count fully (1.0)
-    # the same three with the network's probability; None: as fitted on the training photos
+    # the same three with the network's probability; None: as fitted on the dev photos
     net_edge_bonus: float | None = None
     net_jump_cost: float | None = None
     net_jump_cap: float | None = None
@@ -205,27 +205,42 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
     if W > params.work_width:
         return _extract_reduced(image, params)
     features = pixel_features(image)
+    edges = _edge_strength(features, params.edge_percentile)
     if params.method == "gmm":
-        p = _gmm_probability(features, params)
-        rows = _boundary(features, p, params.edge_bonus, params.jump_cost, params.jump_cap, params.edge_percentile,
-                         params.texture_weight)
+        texture = _texture_cost(features, params.texture_weight)
+        p = _gmm_probability(features, edges, texture, params)
+        rows = _boundary(p, edges, params.edge_bonus, params.jump_cost, params.jump_cap, texture)
     elif params.method == "net":
-        import cv2
-
-        logits = cv2.resize(sky_logits(image), (W, H), interpolation=cv2.INTER_LINEAR)
-        p = (1.0 / (1.0 + np.exp(-np.clip(logits, -30, 30)))).astype(np.float32)
+        p = net_probability(image)
         fitted = _fitted()
-        rows = _boundary(features, p, *(fitted[k] if getattr(params, k) is None else getattr(params, k)
-                                        for k in ("net_edge_bonus", "net_jump_cost", "net_jump_cap")),
-                         params.edge_percentile, 0.0)
+        rows = _boundary(p, edges, *(fitted[k] if getattr(params, k) is None else getattr(params, k)
+                                     for k in ("net_edge_bonus", "net_jump_cost", "net_jump_cap")))
     else:
         raise ValueError(f"unknown skyline method {params.method!r} (net or gmm)")
     sub, contrast = _subpixel(features, rows)
-    skyline = np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub))
+    skyline = boundary_skyline(rows, sub, H)
     return ExtractedSkyline(skyline, column_confidence(p, rows, contrast, skyline, fitted=params.method == "net"), p)
 
 
-def _gmm_probability(features: np.ndarray, params: SkylineParams) -> np.ndarray:
+def net_probability(image: np.ndarray, weights: str | None = None) -> np.ndarray:
+    """(H, W) float32 P(sky) of the sky network (another ONNX file: ``weights``), scaled up
+    to the photo's size."""
+    import cv2
+
+    H, W = image.shape[:2]
+    logits = sky_logits(image) if weights is None else sky_logits(image, weights=weights)
+    logits = cv2.resize(logits, (W, H), interpolation=cv2.INTER_LINEAR)
+    return (1.0 / (1.0 + np.exp(-np.clip(logits, -30, 30)))).astype(np.float32)
+
+
+def boundary_skyline(rows: np.ndarray, sub: np.ndarray, H: int) -> np.ndarray:
+    """Skyline (W,) from integer boundary rows and their sub-pixel refinement: NaN where a
+    column is all sky (row H), 0 where terrain reaches the top edge."""
+    return np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub))
+
+
+def _gmm_probability(features: np.ndarray, edges: np.ndarray, texture: np.ndarray | None,
+                     params: SkylineParams) -> np.ndarray:
     """P(sky) from colour-texture mixtures re-fitted to this photo (``method="gmm"``)."""
     H, W = features.shape[:2]
     prior = _row_prior(H)
@@ -235,24 +250,29 @@ def _gmm_probability(features: np.ndarray, params: SkylineParams) -> np.ndarray:
         p = sky_probability(features, sky_mask, terrain_mask, prior, components=params.components, seed=round_)
         if round_ == params.rounds - 1:
             break
-        rows = _boundary(features, p, params.edge_bonus, params.jump_cost, params.jump_cap, params.edge_percentile,
-                         params.texture_weight)
+        rows = _boundary(p, edges, params.edge_bonus, params.jump_cost, params.jump_cap, texture)
         sky_mask = v < rows[None, :] - params.band
         terrain_mask = v >= rows[None, :] + params.band
     return p
 
 
-def _boundary(features: np.ndarray, p: np.ndarray, edge_bonus: float, jump_cost: float, jump_cap: float,
-              edge_percentile: float, texture_weight: float) -> np.ndarray:
+def _texture_cost(features: np.ndarray, weight: float) -> np.ndarray | None:
+    """(H, W) extra cost of labelling textured pixels sky (gradient over its 90th
+    percentile, capped at 1, times ``weight``); None for no weight."""
+    if not weight:
+        return None
+    grad = features[..., 4]
+    return weight * np.clip(grad / max(float(np.percentile(grad, 90)), 1e-3), 0, 1)
+
+
+def _boundary(p: np.ndarray, edges: np.ndarray, edge_bonus: float, jump_cost: float, jump_cap: float,
+              texture: np.ndarray | None = None) -> np.ndarray:
     """(W,) integer boundary row per column (H: all sky) minimising misclassified
-    probability mass minus the colour-edge bonus, with the jump penalty (:func:`boundary_dp`)."""
-    H, W = p.shape
-    sky_cost = 1.0 - p  # what labelling a pixel sky costs
-    if texture_weight:
-        grad = features[..., 4]
-        sky_cost = sky_cost + texture_weight * np.clip(grad / max(float(np.percentile(grad, 90)), 1e-3), 0, 1)
+    probability mass (plus ``texture`` cost on the sky side) minus the colour-edge bonus
+    (``edges`` from :func:`_edge_strength`), with the jump penalty (:func:`boundary_dp`)."""
+    W = p.shape[1]
+    sky_cost = 1.0 - p if texture is None else (1.0 - p) + texture  # what labelling a pixel sky costs
     unary = np.vstack([np.zeros((1, W)), np.cumsum(sky_cost - p, axis=0)])
-    edges = _edge_strength(features, edge_percentile)
     return boundary_dp(unary - edge_bonus * edges, jump_cost, jump_cap)
 
 
@@ -283,7 +303,7 @@ DEFAULT_FIT = {"net_edge_bonus": 4.0, "net_jump_cost": 0.25, "net_jump_cap": 12.
 
 @lru_cache(maxsize=1)
 def _fitted() -> dict:
-    """The weights fitted on the training photos, or neutral ones before any fit."""
+    """The weights fitted on the dev photos, or neutral ones before any fit."""
     if not os.path.exists(FITTED):
         return DEFAULT_FIT
     with open(FITTED) as f:

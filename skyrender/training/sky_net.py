@@ -75,8 +75,6 @@ def _resize_width(image: np.ndarray, width: int) -> np.ndarray:
 
 def load_training_set(renders: int, seed: int) -> list[tuple[str, np.ndarray, np.ndarray]]:
     """(name, RGB uint8 image, P(sky) float32 with NaN = unknown) at :data:`PRELOAD_WIDTH`."""
-    import cv2
-
     from ..features.photo_io import load_photo
 
     data = []
@@ -89,7 +87,6 @@ def load_training_set(renders: int, seed: int) -> list[tuple[str, np.ndarray, np
 
         for name, image, sky in training_renders(renders, seed=seed):
             data.append((name, _resize_width(image, PRELOAD_WIDTH), _resize_width(sky.astype(np.float32), PRELOAD_WIDTH)))
-    del cv2
     return data
 
 

@@ -22,10 +22,11 @@ import json
 
 import numpy as np
 
+from ..benchmarks.skyline_photos import column_errors
 from ..datasets.real_photos import items_on_side
-from ..features.skyline import (FITTED, _boundary, _subpixel, confidence_features)
 from ..features.sky import pixel_features
-from ..features.sky_net import sky_logits
+from ..features.skyline import (FITTED, _boundary, _edge_strength, _subpixel, boundary_skyline, confidence_features,
+                                net_probability)
 
 EDGE_BONUS = (16.0, 32.0, 64.0, 128.0)
 JUMP_COST = (0.5, 1.0, 2.0, 4.0)
@@ -33,9 +34,7 @@ JUMP_CAP = (24.0, 48.0, 96.0)
 
 
 def prepared(photos: int, weights: str | None = None):
-    """(features, P(sky), truth) of up to ``photos`` dev photos, evenly spread."""
-    import cv2
-
+    """(features, colour edges, P(sky), truth) of up to ``photos`` dev photos, evenly spread."""
     from ..features.photo_io import load_photo
 
     items = items_on_side("dev")
@@ -43,18 +42,16 @@ def prepared(photos: int, weights: str | None = None):
     out = []
     for it in items[::step]:
         image = load_photo(it.image_path)
-        H, W = image.shape[:2]
-        logits = cv2.resize(sky_logits(image, weights=weights) if weights else sky_logits(image), (W, H),
-                            interpolation=cv2.INTER_LINEAR)
-        p = (1.0 / (1.0 + np.exp(-np.clip(logits, -30, 30)))).astype(np.float32)
-        out.append((pixel_features(image), p, it.truth_skyline()))
+        features = pixel_features(image)
+        out.append((features, _edge_strength(features, 97.0), net_probability(image, weights), it.truth_skyline()))
     return out
 
 
-def within5(skyline: np.ndarray, truth: np.ndarray) -> np.ndarray:
-    has = np.isfinite(truth)
-    e = np.abs(skyline[has] - truth[has])
-    return np.where(np.isfinite(e), e, 1e6) <= 5
+def skyline_with(features, edges, p, edge: float, cost: float, cap: float):
+    """(skyline, rows, contrast) of one photo for one set of the search's weights."""
+    rows = _boundary(p, edges, edge, cost, cap)
+    sub, contrast = _subpixel(features, rows)
+    return boundary_skyline(rows, sub, p.shape[0]), rows, contrast
 
 
 def fit(photos: int = 0, weights: str | None = None, write: bool = True) -> dict:
@@ -64,25 +61,19 @@ def fit(photos: int = 0, weights: str | None = None, write: bool = True) -> dict
     best = None
     for edge, cost, cap in itertools.product(EDGE_BONUS, JUMP_COST, JUMP_CAP):
         scores = []
-        for features, p, truth in data:
-            rows = _boundary(features, p, edge, cost, cap, 97.0, 0.0)
-            sub, _ = _subpixel(features, rows)
-            H = p.shape[0]
-            scores.append(np.mean(within5(np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub)), truth)))
+        for features, edges, p, truth in data:
+            skyline, _, _ = skyline_with(features, edges, p, edge, cost, cap)
+            scores.append(np.mean(column_errors(skyline, truth) <= 5))
         score = float(np.mean(scores))
         print(f"edge {edge:5.1f} jump {cost:4.2f} cap {cap:4.1f}: dev mean within 5 px {100 * score:.2f} %", flush=True)
         if best is None or score > best[0]:
             best = (score, edge, cost, cap)
     score, edge, cost, cap = best
     xs, ys = [], []
-    for features, p, truth in data:
-        rows = _boundary(features, p, edge, cost, cap, 97.0, 0.0)
-        sub, contrast = _subpixel(features, rows)
-        H = p.shape[0]
-        skyline = np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub))
-        has = np.isfinite(truth)
-        xs.append(confidence_features(p, rows, contrast, skyline)[has])
-        ys.append(within5(skyline, truth))
+    for features, edges, p, truth in data:
+        skyline, rows, contrast = skyline_with(features, edges, p, edge, cost, cap)
+        xs.append(confidence_features(p, rows, contrast, skyline)[np.isfinite(truth)])
+        ys.append(column_errors(skyline, truth) <= 5)
     x, y = np.concatenate(xs), np.concatenate(ys)
     model = LogisticRegression(C=1.0, max_iter=1000).fit(x, y) if len(set(y.tolist())) > 1 else None
     result = {"net_edge_bonus": edge, "net_jump_cost": cost, "net_jump_cap": cap, "dev_mean_within5": score,
