@@ -232,6 +232,9 @@ def localize(
     prior_near: Optional[str] = typer.Option(None, "--prior-near", help="X,Y,RADIUS: a peak within RADIUS m is in view"),
     unordered: bool = typer.Option(False, "--unordered", help="ignore the co-visibility ordering (for comparison)"),
     flat_earth: bool = typer.Option(False, "--flat-earth", help="no earth curvature or refraction"),
+    preset: str = typer.Option("auto", "--preset", help="photo: a real photograph (a DEM that never matches "
+                               "exactly); render: a view rendered from the DEM itself; auto: photo for JPEG "
+                               "files or files with EXIF camera data, render otherwise"),
     crs: Optional[str] = CrsOpt,
     cell_size: Optional[float] = CellOpt,
     variant: Optional[str] = VariantOpt,
@@ -242,9 +245,10 @@ def localize(
     from dataclasses import replace
 
     from .features import load_photo
-    from .features.photo_io import exif_fov
+    from .features.photo_io import exif_fov, is_camera_photo
     from .io import camera_geojson, write_json
     from .localizer import LocalizeParams
+    from .model import ModelParams
     from .localizer import localize as run_localize
     from .render import Terrain
     from .viz import localization_overlay, write_image
@@ -258,12 +262,18 @@ def localize(
     for path, option, kinds in ((overlay, "--overlay", IMAGE_SUFFIXES), (geojson, "--geojson", (".geojson", ".json"))):
         if path is not None:
             _check_writable(path, option, kinds)
+    if preset not in ("auto", "photo", "render"):
+        raise InputError(f"--preset must be auto, photo or render, got {preset!r}")
     prior = _parse_prior(prior_peak, prior_near)
     photo = load_photo(image)
     from_exif = exif_fov(str(image)) if fov is None else None
-    the_model = _load_or_build_model(model_dir, dem, crs, cell_size, variant)
+    if preset == "auto":
+        preset = "photo" if is_camera_photo(str(image)) else "render"
+    the_model = _load_or_build_model(model_dir, dem, crs, cell_size, variant,
+                                     ModelParams.for_photos() if preset == "photo" else ModelParams())
     terrain = Terrain(the_model.dem, curvature=not flat_earth, variant=variant)
-    params = replace(LocalizeParams(), ordered=not unordered, refine_fov=from_exif is not None)
+    base = LocalizeParams.for_photos() if preset == "photo" else LocalizeParams()
+    params = replace(base, ordered=not unordered, refine_fov=from_exif is not None)
     fov = fov if from_exif is None else from_exif
     result = run_localize(photo, the_model, height, fov, prior, terrain=terrain, params=params,
                           curvature=not flat_earth)
@@ -303,8 +313,9 @@ def _parse_prior(prior_peak, prior_near) -> dict | None:
     return prior or None
 
 
-def _load_or_build_model(model_dir, dem, crs, cell_size, variant):
-    """The model from --model, or built from --dem and cached (:func:`skyrender.model.cached_model`)."""
+def _load_or_build_model(model_dir, dem, crs, cell_size, variant, params=None):
+    """The model from --model, or built from --dem with ``params`` (ModelParams; None:
+    the defaults) and cached (:func:`skyrender.model.cached_model`)."""
     from .backend import mitsuba
     from .dem import load_dem
     from .model import cached_model, load_model
@@ -313,7 +324,7 @@ def _load_or_build_model(model_dir, dem, crs, cell_size, variant):
         return load_model(model_dir)
     terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
     mitsuba(variant)
-    return cached_model(terrain_dem)
+    return cached_model(terrain_dem) if params is None else cached_model(terrain_dem, params)
 
 
 def _check_model_dir(path: Path) -> None:

@@ -37,11 +37,13 @@ def place_window(lat: float, lon: float) -> tuple[float, float, float, float]:
     return clon - HALF_LON, clat - HALF_LAT, clon + HALF_LON, clat + HALF_LAT
 
 
-def run(items, fov_modes: list[str], progress: bool = True) -> list[dict]:
+def run(items, fov_modes: list[str], progress: bool = True, params=None) -> list[dict]:
+    """Localize each photo (``params``: LocalizeParams, default the photo preset); rows as in the module doc."""
     from ..dem import load_dem
     from ..features import extract_skyline, load_photo
-    from ..localizer import localize
-    from ..model import cached_model
+    from ..features.skyline import SkylineParams
+    from ..localizer import LocalizeParams, localize
+    from ..model import ModelParams, cached_model
     from ..render import Terrain
 
     with open(os.path.join(REPO, "experiments", "photos", "split.json")) as f:
@@ -50,6 +52,7 @@ def run(items, fov_modes: list[str], progress: bool = True) -> list[dict]:
     for it in items:
         centres.setdefault(place_of[it.key], []).append((it.lat, it.lon))
     loaded: dict[str, tuple] = {}
+    params = params or LocalizeParams.for_photos()
     rows = []
     for n, it in enumerate(items):
         place = place_of[it.key]
@@ -59,7 +62,7 @@ def run(items, fov_modes: list[str], progress: bool = True) -> list[dict]:
             t = time.perf_counter()
             dem = load_dem(tiles_around(lat, lon, DEM_DIR), bounds=window)
             terrain = Terrain(dem)
-            model = cached_model(dem, terrain=terrain)
+            model = cached_model(dem, ModelParams.for_photos(), terrain=terrain)
             loaded.clear()  # one place's model in memory at a time
             loaded[place] = (dem, terrain, model, time.perf_counter() - t, window)
         dem, terrain, model, model_seconds, window = loaded[place]
@@ -67,13 +70,14 @@ def run(items, fov_modes: list[str], progress: bool = True) -> list[dict]:
         for mode in fov_modes:
             t = time.perf_counter()
             image = load_photo(it.image_path)
-            skyline = extract_skyline(image)
+            skyline = extract_skyline(image, SkylineParams(method=params.skyline_method))
             fov = float(np.degrees(2 * np.arctan(image.shape[1] / (2 * it.focal_px)))) if mode == "known" else None
-            result = localize(image, model, 2.0, fov, terrain=terrain, skyline=skyline)
+            result = localize(image, model, 2.0, fov, terrain=terrain, skyline=skyline, params=params)
             seconds = time.perf_counter() - t
             row = {"photo": it.key, "fov_mode": mode, "status": result.status, "confidence": result.confidence,
                    "seconds": seconds, "model_seconds": model_seconds, "window": window,
-                   "stage_seconds": result.stats.to_dict()["seconds"]}
+                   "stage_seconds": result.stats.to_dict()["seconds"], "best_score": result.stats.best_score,
+                   "runner_up_score": result.stats.runner_up_score}
             if result.localized:
                 row["error_m"] = float(np.hypot(result.pose[0] - tx, result.pose[1] - ty))
                 row["fov"] = result.fov

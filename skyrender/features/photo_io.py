@@ -85,6 +85,15 @@ def upright(image: np.ndarray, orientation: int) -> np.ndarray:
     return np.ascontiguousarray(out[:, ::-1] if flip else out)
 
 
+def is_camera_photo(path: str) -> bool:
+    """True for a JPEG, or an image whose EXIF names a camera or a focal length: a real
+    photograph, not a render (``localize --preset auto``)."""
+    if os.path.splitext(path)[1].lower() in (".jpg", ".jpeg"):
+        return True
+    tags = _exif(path)
+    return any(k in tags for k in ("Make", "Model", "FocalLength", "FocalLengthIn35mmFilm"))
+
+
 def exif_fov(path: str) -> float | None:
     """Horizontal field of view (degrees) of the *upright* photo from its EXIF focal length.
 

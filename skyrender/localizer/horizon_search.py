@@ -36,18 +36,22 @@ class HorizonSearchParams:
     windows: tuple = WINDOWS
     per_window: int = 200  # best (centre, azimuth) pairs kept per window
     min_bins: int = 12  # a window needs this many azimuth bins of skyline
+    tilts: tuple = (0.0,)  # camera tilts (deg) the skyline is turned into directions for (photos look up at ridges)
+    terms: int = 3  # fitted per (centre, azimuth): elevation offset, + slope (swing), + curvature (the level error)
+    rank_by_cost: bool = False  # refine the best by this search's own cost too, not only by verification score
 
 
 def skyline_directions(skyline: np.ndarray, weights: np.ndarray, intrinsics: Intrinsics,
-                       bin_deg: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                       bin_deg: float, tilt: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The photo's skyline (W,) as elevation angles (deg) on azimuth bins (bin_deg)
-    relative to the optical axis, for a level camera: (bins (n,) int, elevation (n,),
-    weights (n,)). Columns without terrain (NaN) are left out."""
+    relative to the optical axis, for a camera tilted ``tilt`` deg (up positive) and no
+    swing: (bins (n,) int, elevation (n,), weights (n,)). Columns without terrain (NaN)
+    are left out."""
     u = np.arange(len(skyline)) + 0.5
     good = np.isfinite(skyline)
     if good.sum() < 2:
         return np.zeros(0, np.int64), np.zeros(0), np.zeros(0)
-    d = pixel_directions(u[good], skyline[good], np.zeros(6), intrinsics)
+    d = pixel_directions(u[good], skyline[good], np.array([0.0, 0.0, 0.0, 0.0, tilt, 0.0]), intrinsics)
     az = np.degrees(np.arctan2(d[:, 0], d[:, 1]))
     el = np.degrees(np.arcsin(np.clip(d[:, 2], -1.0, 1.0)))
     bins = np.arange(np.ceil(az.min() / bin_deg), np.floor(az.max() / bin_deg) + 1).astype(np.int64)
@@ -55,10 +59,10 @@ def skyline_directions(skyline: np.ndarray, weights: np.ndarray, intrinsics: Int
 
 
 def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.ndarray, elevation: np.ndarray,
-                  weights: np.ndarray, bin_deg: float):
+                  weights: np.ndarray, bin_deg: float, terms: int = 3):
     """Weighted mean squared residual (deg^2) of every (centre, azimuth) after the
-    fit of offset + a alpha + b alpha^2, (N, n_bins); and a function giving the fitted
-    offset (deg) at flat indices of it.
+    fit of offset + a alpha + b alpha^2 (the first ``terms`` of them), (N, n_bins); and
+    a function giving the fitted offset (deg) at flat indices of it.
 
     spectra : rfft over azimuth of the horizons P (N, n_bins) and of P^2.
     bins, elevation, weights : the photo's skyline (:func:`skyline_directions`).
@@ -66,7 +70,7 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
     """
     spec_p, spec_p2 = spectra
     alpha = np.radians(bins * bin_deg)
-    X = np.column_stack([np.ones_like(alpha), alpha, alpha ** 2])
+    X = np.column_stack([np.ones_like(alpha), alpha, alpha ** 2])[:, :terms]
     idx = bins % n_bins
 
     def spread(values: np.ndarray) -> np.ndarray:
@@ -86,20 +90,20 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
     cost += np.float32((w * elevation ** 2).sum())
     # r = X^T W (P - e) per (centre, azimuth); the fit removes r^T gram^-1 r
     r = []
-    for k in range(3):
+    for k in range(terms):
         r.append(correlate(spec_p, spread(w * X[:, k])))
         r[k] -= np.float32((w * X[:, k] * elevation).sum())
-    inv = np.linalg.inv((X * w[:, None]).T @ X + 1e-9 * np.eye(3)).astype(np.float32)
+    inv = np.linalg.inv((X * w[:, None]).T @ X + 1e-9 * np.eye(terms)).astype(np.float32)
     term = np.empty_like(cost)
-    for i in range(3):
-        for j in range(i, 3):
+    for i in range(terms):
+        for j in range(i, terms):
             np.multiply(r[i], r[j], out=term)
             term *= inv[i, j] * (1.0 if i == j else 2.0)
             cost -= term
     cost /= np.float32(max(float(w.sum()), 1e-9))
 
     def offset_at(flat: np.ndarray) -> np.ndarray:  # the fitted offset (deg) at flat indices, computed there only
-        return sum(inv[0, k] * r[k].ravel()[flat] for k in range(3))
+        return sum(inv[0, k] * r[k].ravel()[flat] for k in range(terms))
 
     return cost, offset_at
 
@@ -107,28 +111,32 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
 def horizon_poses(horizons: Horizons, skyline: np.ndarray, weights: np.ndarray, intrinsics: Intrinsics, dem,
                   height: float, params: HorizonSearchParams = HorizonSearchParams()) -> tuple[np.ndarray, np.ndarray]:
     """Poses (K, 6) of the best (centre, azimuth) pairs of each window, camera ``height``
-    m above the centre's ground, pan = azimuth, tilt = fitted offset, swing 0; and their
-    costs (K,) (deg^2). Empty when the skyline is too short for any window."""
+    m above the centre's ground, pan = azimuth, tilt = the tried tilt + fitted offset,
+    swing 0; and their costs (K,) (deg^2). Empty when the skyline is too short for any
+    window."""
     n_bins = horizons.elevation.shape[1]
-    bins, elevation, w = skyline_directions(skyline, weights, intrinsics, horizons.bin_deg)
-    if len(horizons) == 0 or len(bins) < params.min_bins:
+    if len(horizons) == 0:
         return np.zeros((0, 6)), np.zeros(0)
     spectra = horizons.spectra
-    frac = (bins - bins[0]) / max(bins[-1] - bins[0], 1)
-    picked: dict[tuple[int, int], tuple[float, float]] = {}
-    for lo, hi in params.windows:
-        w_win = w * ((frac >= lo) & (frac <= hi))
-        if np.count_nonzero(w_win) < params.min_bins:
+    picked: dict[tuple[int, int], tuple[float, float]] = {}  # (centre, azimuth bin) -> (cost, tilt)
+    for tilt in params.tilts:
+        bins, elevation, w = skyline_directions(skyline, weights, intrinsics, horizons.bin_deg, tilt)
+        if len(bins) < params.min_bins:
             continue
-        cost, offset_at = horizon_costs(spectra, n_bins, bins, elevation, w_win, horizons.bin_deg)
-        cost = cost.ravel()
-        k = min(params.per_window, cost.size)
-        best = np.argpartition(cost, k - 1)[:k]
-        best = best[np.argsort(cost[best])]
-        for flat, offset in zip(best, offset_at(best)):
-            key = divmod(int(flat), n_bins)
-            if key not in picked:
-                picked[key] = (float(cost[flat]), float(offset))
+        frac = (bins - bins[0]) / max(bins[-1] - bins[0], 1)
+        for lo, hi in params.windows:
+            w_win = w * ((frac >= lo) & (frac <= hi))
+            if np.count_nonzero(w_win) < params.min_bins:
+                continue
+            cost, offset_at = horizon_costs(spectra, n_bins, bins, elevation, w_win, horizons.bin_deg, params.terms)
+            cost = cost.ravel()
+            k = min(params.per_window, cost.size)
+            best = np.argpartition(cost, k - 1)[:k]
+            best = best[np.argsort(cost[best])]
+            for flat, offset in zip(best, offset_at(best)):
+                key = divmod(int(flat), n_bins)
+                if key not in picked or cost[flat] < picked[key][0]:
+                    picked[key] = (float(cost[flat]), tilt + float(offset))
     if not picked:
         return np.zeros((0, 6)), np.zeros(0)
     keys = np.array(list(picked.keys()), np.int64)

@@ -16,7 +16,9 @@ far-horizon search also picks the focal lengths worth refining.
 
 from __future__ import annotations
 
+import json
 import math
+import os
 import time
 from dataclasses import dataclass, field
 
@@ -25,6 +27,7 @@ import numpy as np
 from ..camera import Intrinsics, project
 from ..errors import InputError
 from ..features import ExtractedSkyline, extract_skyline, load_photo, skyline_peaks
+from ..features.skyline import SkylineParams
 from ..model import Model
 from ..render import Terrain, render_skylines
 from .constraints import interfeature_visibility, prior_in_view, segments_in_sky, skyline_limit
@@ -36,10 +39,26 @@ from .verification import ScoreParams, verify_poses
 
 #: Focal lengths tried when the field of view is unknown (horizontal fov, degrees).
 FOV_CANDIDATES = (30.0, 40.0, 50.0, 60.0, 70.0)
+#: The photo confidence P(within 1 km) = logistic(a + b * margin): (a, b) fitted on the CH1
+#: training side by ``python -m skyrender.training.localize_fit``, which writes this file.
+PHOTO_CONFIDENCE_FILE = os.path.join(os.path.dirname(__file__), "photo_confidence.json")
+
+
+def _photo_margin_logit() -> tuple[float, float]:
+    try:
+        with open(PHOTO_CONFIDENCE_FILE) as f:
+            a, b = json.load(f)["logit"]
+        return float(a), float(b)
+    except (OSError, ValueError, KeyError, TypeError):
+        return 0.0, 1.0  # not fitted yet
+
+
+PHOTO_MARGIN_LOGIT = _photo_margin_logit()
 
 
 @dataclass(frozen=True)
 class LocalizeParams:
+    skyline_method: str = "gmm"  # the skyline extractor when none is given: "gmm" (renders) or "net" (photos)
     n_peaks: int = 8  # image peaks taken (the paper's top N)
     max_peak_aspect: float = 1.5  # steeper skyline peaks are trees or posts in front, not mountains
     peak_smooth_px: float = 3.0  # skyline smoothing before peak finding (2 px let sub-pixel changes reorder the peaks)
@@ -60,12 +79,31 @@ class LocalizeParams:
     confirm_chunks: int = 2  # then go on this many chunks: a pose tens of metres off can score that well too
     min_confidence: float = 0.7  # abstain below this (wrong poses scored 0.51-0.59 on test views)
     same_pose_m: float = 150.0  # candidates closer than this (and same heading) are one
+    runner_up_m: float | None = None  # confidence: the runner-up is the best refined pose this far away (None: distinct)
+    confidence_model: str = "agreement"  # "agreement" (renders) or "margin": P(right) from the runner-up's margin
+    margin_logit: tuple = (0.0, 1.0)  # "margin": P = 1 / (1 + exp(-(a + b (1 - best / runner-up score))))
     ordered: bool = True  # probabilistic ordering (False: a seeded arbitrary order)
     use_horizons: bool = True  # also match the skyline against the model's far horizons (no peaks needed)
     horizon: HorizonSearchParams = field(default_factory=HorizonSearchParams)
     horizon_fov_step: tuple = (5.0, 2.5, 1.25)  # unknown fov: probes around the best fov of the far-horizon search
     refine_fov: bool = False  # a given fov is only a start (e.g. from EXIF): refinement fits the focal length too
     score: ScoreParams = field(default_factory=ScoreParams)
+
+    @classmethod
+    def for_photos(cls) -> "LocalizeParams":
+        """Real photographs, where the DEM never matches exactly (the oracle fit at the
+        true position leaves 1.4-7.4 px, ``make oracle``): the far-horizon search turns
+        the skyline into directions for tilts from -10 to +30 deg, fits offset and slope
+        only, and the best 8 of it by its own cost and 8 by verification score are
+        refined; the skyline comes from the learned extractor. Three-point hypotheses
+        are off (on CH1 their peaks are rarely DEM peaks; generating them took 10-30 s). The refined scores of right and
+        wrong poses overlap (1.1-2.4 vs 1.1-4.0 px on CH1 training photos), but the
+        margin to the best pose over 1 km away separates them, so the confidence is a
+        logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`)."""
+        return cls(skyline_method="net", max_hypotheses=0, final_refinements=8, max_refinements=4, max_horizon_refinements=16,
+                   give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=1000.0, confidence_model="margin",
+                   margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=0.5,
+                   horizon=HorizonSearchParams(tilts=(-10.0, 0.0, 10.0, 20.0, 30.0), terms=2, rank_by_cost=True))
 
 
 @dataclass
@@ -77,6 +115,8 @@ class LocalizeStats:
     verified: int = 0
     horizon_poses: int = 0  # of the verified, poses from the far-horizon search
     refined: int = 0
+    best_score: float | None = None  # the winner's refined score (px)...
+    runner_up_score: float | None = None  # ...and the runner-up's (the confidence's margin)
     seconds: dict = field(default_factory=dict)
 
     def add_time(self, stage: str, seconds: float) -> None:
@@ -87,6 +127,7 @@ class LocalizeStats:
         return {"generated": self.generated, "evaluated": self.evaluated, "rejected": dict(self.rejected),
                 "rejected_share": {k: (v / self.evaluated if self.evaluated else 0.0) for k, v in self.rejected.items()},
                 "verified": self.verified, "horizon_poses": self.horizon_poses, "refined": self.refined,
+                "best_score": self.best_score, "runner_up_score": self.runner_up_score,
                 "seconds": {k: round(v, 4) for k, v in self.seconds.items()},
                 "hypotheses_per_second": self.evaluated / solve if solve > 0 else 0.0}
 
@@ -132,8 +173,9 @@ class _Candidate:
     refined: Refined | None = None
 
 
-def _image_skyline(image, skyline) -> tuple[np.ndarray, np.ndarray, int, int]:
-    """(skyline, weights, W, H) from a photo (path or array) or a given skyline."""
+def _image_skyline(image, skyline, method: str = "gmm") -> tuple[np.ndarray, np.ndarray, int, int]:
+    """(skyline, weights, W, H) from a photo (path or array) or a given skyline; ``method``:
+    the extractor (:class:`~skyrender.features.skyline.SkylineParams`) when none is given."""
     if isinstance(image, (str, bytes)) or hasattr(image, "__fspath__"):
         image = load_photo(image)
     image = np.asarray(image)
@@ -141,7 +183,7 @@ def _image_skyline(image, skyline) -> tuple[np.ndarray, np.ndarray, int, int]:
         raise InputError(f"an image must be 2-D (H x W) or H x W x channels, got shape {image.shape}")
     H, W = image.shape[:2]
     if skyline is None:
-        skyline = extract_skyline(image)
+        skyline = extract_skyline(image, SkylineParams(method=method))
     if isinstance(skyline, ExtractedSkyline):
         return skyline.skyline.astype(np.float64), np.clip(skyline.confidence, 0.05, 1.0), W, H
     sky = np.asarray(skyline, np.float64)
@@ -176,6 +218,14 @@ def confidence_of(best: Refined, runner_up: Refined | None) -> float:
     return float(best.agreement * min(1.0, 0.5 + 5.0 * agreement_margin + score_margin))
 
 
+def margin_confidence(best_score: float, runner_up_score: float, logit: tuple) -> float:
+    """P(right) from the relative margin m = 1 - best / runner-up (scores in px, lower is
+    better): 1 / (1 + exp(-(a + b m))) for ``logit`` = (a, b); no runner-up is m = 1."""
+    margin = 1.0 - best_score / runner_up_score if runner_up_score > 0 and math.isfinite(runner_up_score) else 1.0
+    a, b = logit
+    return float(1.0 / (1.0 + math.exp(-(a + b * margin))))
+
+
 def localize(image, model: Model, height: float, fov: float | None = None, prior=None, *,
              terrain: Terrain | None = None, skyline=None, params: LocalizeParams = LocalizeParams(),
              curvature: bool = True) -> LocalizationResult:
@@ -201,7 +251,7 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     t_start = time.perf_counter()
     stats = LocalizeStats()
     tick = time.perf_counter()
-    sky, weights, W, H = _image_skyline(image, skyline)
+    sky, weights, W, H = _image_skyline(image, skyline, params.skyline_method)
     fovs = (float(fov),) if fov is not None else FOV_CANDIDATES
     intrinsics = Intrinsics.from_fov(fovs[0], W, H)
     peaks = image_peaks(sky, params)
@@ -218,7 +268,7 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     peak_uv = np.array([[p.u, p.v] for p in peaks]).reshape(-1, 2)
     in_view = model.features_for_prior(**prior) if prior else None
     hyps = Hypotheses(np.zeros((0, 3), np.int64), np.zeros((0, 3), np.int64), np.zeros(0))
-    if len(peaks) >= 3:
+    if len(peaks) >= 3 and params.max_hypotheses > 0:
         hyps = generate_hypotheses(peak_uv[:, 0], np.array([p.size for p in peaks]), model, in_view, params.ordered,
                                    neighbours=params.neighbours, k=params.neighbours_k)
         hyps = hyps.take(slice(0, params.max_hypotheses))
@@ -235,13 +285,16 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
             """Far-horizon poses at one fov, verified; returns their best plain score (px)."""
             k_i = Intrinsics.from_fov(fov_i, W, H)
             tick = time.perf_counter()
-            poses, _ = horizon_poses(model.horizons, sky, weights, k_i, model.dem, height, params.horizon)
+            poses, cost = horizon_poses(model.horizons, sky, weights, k_i, model.dem, height, params.horizon)
             if in_view is not None and len(poses):
-                poses = poses[prior_in_view(poses, features[in_view], sky, k_i, params.limit_tol_px, curvature)]
+                seen = prior_in_view(poses, features[in_view], sky, k_i, params.limit_tol_px, curvature)
+                poses, cost = poses[seen], cost[seen]
             stats.generated += len(poses)
             stats.add_time("horizon_search", time.perf_counter() - tick)
             tick = time.perf_counter()
             score, trusted = verify_poses(terrain, poses, k_i, sky, weights, params.verify_stride, params=params.score)
+            if params.horizon.rank_by_cost:  # the second ranking: the search's own cost
+                trusted = cost
             stats.verified += len(poses)
             stats.horizon_poses += len(poses)
             stats.add_time("verification", time.perf_counter() - tick)
@@ -319,8 +372,16 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     if not done:
         return abstain()
     best = accepted or done[0]
-    others = [c for c in done if c is not best and _distinct([best.refined.pose], c.refined.pose, params.same_pose_m)]
-    confidence = confidence_of(best.refined, others[0].refined if others else None)
+    if params.runner_up_m is None:
+        others = [c for c in done if c is not best and _distinct([best.refined.pose], c.refined.pose, params.same_pose_m)]
+    else:
+        others = [c for c in done if math.hypot(*(c.refined.pose[:2] - best.refined.pose[:2])) > params.runner_up_m]
+    runner_up = others[0].refined if others else None
+    stats.best_score, stats.runner_up_score = best.refined.score, runner_up.score if runner_up else None
+    if params.confidence_model == "margin":
+        confidence = margin_confidence(best.refined.score, runner_up.score if runner_up else np.inf, params.margin_logit)
+    else:
+        confidence = confidence_of(best.refined, runner_up)
     if confidence < params.min_confidence:
         return abstain()
     r = best.refined

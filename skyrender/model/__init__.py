@@ -6,6 +6,8 @@ and :func:`load_model` keep it in a versioned ``MODEL_DIR``.
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 import time
 from pathlib import Path
@@ -50,15 +52,19 @@ def model_cache_dir() -> Path:
     return Path(os.environ.get("SKYRENDER_CACHE", Path.home() / ".cache" / "skyrender"))
 
 
-def cached_model(dem: DEM, *, terrain=None) -> Model:
-    """The model of ``dem`` from the cache (keyed by the DEM's fingerprint), built and
-    cached on first use; an unwritable cache only costs the rebuild next time."""
-    cache = model_cache_dir() / dem.fingerprint()
+def cached_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None) -> Model:
+    """The model of ``dem`` built with ``params`` from the cache (keyed by the DEM's
+    fingerprint and the parameters), built and cached on first use; an unwritable
+    cache only costs the rebuild next time."""
+    key = dem.fingerprint()
+    if params != ModelParams():
+        key += "-" + hashlib.sha1(json.dumps(params.to_dict(), sort_keys=True).encode()).hexdigest()[:10]
+    cache = model_cache_dir() / key
     try:
-        return load_model(cache, dem=dem)
+        return load_model(cache, dem=dem, params=params)
     except InputError:
         pass
-    built = build_model(dem, terrain=terrain)
+    built = build_model(dem, params, terrain=terrain)
     try:
         save_model(built, cache)
     except InputError:
