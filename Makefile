@@ -21,6 +21,7 @@ demo: install
 	$(BIN)/python -m skyrender.demo scenes/jacksboro.toml --out $(OUT)
 
 test: install
+	$(BIN)/ruff check skyrender tests
 	$(BIN)/python -m pytest -q
 
 bench: bench-render bench-skyline bench-localize

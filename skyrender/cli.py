@@ -248,8 +248,8 @@ def localize(
     from .features.photo_io import exif_fov, is_camera_photo
     from .io import camera_geojson, write_json
     from .localizer import LocalizeParams
-    from .model import ModelParams
     from .localizer import localize as run_localize
+    from .model import ModelParams
     from .render import Terrain
     from .viz import localization_overlay, write_image
 

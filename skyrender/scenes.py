@@ -15,8 +15,9 @@ Format::
 from __future__ import annotations
 
 import os
-import tomllib
 from dataclasses import dataclass
+
+import tomllib
 
 from .camera import Intrinsics, Pose
 from .dem import DEM, load_dem

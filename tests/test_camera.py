@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from skyrender.camera import (CURVATURE_COEFF, Intrinsics, Pose, camera_axes, earth_drop, pixel_directions,
-                              project)
+from skyrender.camera import CURVATURE_COEFF, Intrinsics, Pose, camera_axes, earth_drop, pixel_directions, project
 
 
 def test_axes_are_orthonormal_and_follow_the_contract():

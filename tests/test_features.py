@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from skyrender.benchmarks.skyline_photos import column_errors, otsu_baseline, truth_without_edge
-from skyrender.datasets.real_photos import truth_from_mask, truth_from_red_line
 from skyrender.cli import main
+from skyrender.datasets.real_photos import truth_from_mask, truth_from_red_line
 from skyrender.features import as_rgb8, extract_skyline, load_photo, skyline_peaks
 from skyrender.features.sky import clear_sky_field, hazy_ridge_logit, shadowed_snow_logit
 from skyrender.render.photo import Look, render_photo

@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+from skyrender.benchmarks.views import sample_views
 from skyrender.camera import Intrinsics, Pose, camera_axes, project
 from skyrender.dem.synthetic import fractal_terrain
 from skyrender.localizer import LocalizeParams, localize
@@ -15,7 +16,6 @@ from skyrender.localizer.hypotheses import PERMUTATIONS, generate_hypotheses, im
 from skyrender.localizer.pose_solver import resection_2d, rotations_from_bearings, solve_poses
 from skyrender.localizer.refinement import refine_pose, resection_sweep
 from skyrender.localizer.verification import ScoreParams, align_skylines, score_skylines, trust_of_distance
-from skyrender.benchmarks.views import sample_views
 from skyrender.model import build_model
 from skyrender.render import Terrain, render_skylines
 
@@ -114,7 +114,9 @@ def test_hypotheses_are_complete_and_most_probable_first(scene):
     assert len(hyps) == len(itri) * len(mtri) * len(PERMUTATIONS)
     assert np.all(np.diff(hyps.log_p) <= 1e-12)
     unordered = generate_hypotheses(u, size, model, ordered=False)
-    key = lambda h: np.sort(np.column_stack([h.image, h.features]) @ [1, 10**3, 10**6, 10**9, 10**12, 10**15])
+    def key(h):
+        return np.sort(np.column_stack([h.image, h.features]) @ [1, 10**3, 10**6, 10**9, 10**12, 10**15])
+
     np.testing.assert_array_equal(key(hyps), key(unordered))
     named = model.features_for_prior(ids=[int(model.features.id[model.pivots[0]])])
     prior = generate_hypotheses(u, size, model, named)
@@ -335,6 +337,37 @@ def test_far_horizon_search_puts_the_camera_among_its_poses(scene, views):
     assert min((score < score[near].min()).sum(), (trusted < trusted[near].min()).sum()) < 12
 
 
+def test_far_horizon_search_over_tilts_finds_a_camera_looking_up(scene, views):
+    """Photos look up at the ridges above them (CH1: up to 30 deg): with the skyline
+    turned into directions for tilts 0, 10, 20 and 30 deg, the search still gives a
+    pose within a grid step of a camera tilted 20 deg up, with that tilt (+-1 deg)."""
+    from skyrender.features import extract_skyline
+    from skyrender.localizer.horizon_search import HorizonSearchParams, horizon_poses
+
+    dem, terrain, model = scene
+    p = views.poses[3]
+    pose = Pose(p.x, p.y, p.z, p.pan, 20.0, 0.0)
+    sky = extract_skyline(_photo(terrain, pose))
+    params = HorizonSearchParams(tilts=(0.0, 10.0, 20.0, 30.0), terms=2)
+    poses, cost = horizon_poses(model.horizons, sky.skyline, sky.confidence, K, dem, 2.0, params)
+    step = np.sqrt(2.0) * 250.0 / 2.0
+    near = (np.hypot(poses[:, 0] - pose.x, poses[:, 1] - pose.y) <= step + 1.0) & (
+        np.abs((poses[:, 3] - pose.pan + 180.0) % 360.0 - 180.0) <= 3.0)
+    assert near.any()
+    assert np.abs(poses[near, 4] - 20.0).min() < 1.0
+
+
+def test_photo_confidence_is_a_logistic_of_the_margin_to_the_runner_up():
+    from skyrender.localizer.pipeline import margin_confidence
+
+    assert margin_confidence(1.0, 2.0, (0.0, 1.0)) == pytest.approx(1.0 / (1.0 + np.exp(-0.5)))
+    assert margin_confidence(1.0, np.inf, (-2.0, 4.0)) == pytest.approx(1.0 / (1.0 + np.exp(-2.0)))  # no runner-up
+    # a runner-up as good as the best leaves only the prior; a better margin raises it
+    assert margin_confidence(2.0, 2.0, (-3.0, 10.0)) < margin_confidence(1.5, 2.0, (-3.0, 10.0))
+    photo = LocalizeParams.for_photos()
+    assert photo.confidence_model == "margin" and photo.runner_up_m >= 1000.0 and photo.horizon.terms == 2
+
+
 def test_localizes_from_the_far_horizons_alone(scene, views):
     """No peak hypotheses at all (two image peaks taken): the far-horizon poses, verified
     and refined, localize view 1 (whose matched peaks lie at opposite edges of the frame)."""
@@ -419,7 +452,7 @@ def test_cli_localize_abstains_with_exit_3(model_dir, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("case", ["no_model", "both", "negative_height", "bad_fov", "missing_image", "bad_prior",
-                                  "not_a_model"])
+                                  "not_a_model", "bad_preset"])
 def test_cli_localize_bad_input_is_one_line_and_exit_2(case, model_dir, tmp_path, capsys):
     from skyrender.viz import write_image
 
@@ -431,7 +464,8 @@ def test_cli_localize_bad_input_is_one_line_and_exit_2(case, model_dir, tmp_path
             "bad_fov": [img, "--model", model_dir, "--height", 2, "--fov", 200],
             "missing_image": [tmp_path / "none.png", "--model", model_dir, "--height", 2],
             "bad_prior": [img, "--model", model_dir, "--height", 2, "--prior-near", "1,2"],
-            "not_a_model": [img, "--model", tmp_path, "--height", 2]}[case]
+            "not_a_model": [img, "--model", tmp_path, "--height", 2],
+            "bad_preset": [img, "--model", model_dir, "--height", 2, "--preset", "phone"]}[case]
     code, out, err = _run(capsys, ["localize", *args])
     assert code == 2 and out == ""
     assert len(err.strip().splitlines()) == 1 and err.startswith("skyrender: error:")

@@ -12,10 +12,18 @@ from scipy.optimize import minimize
 from skyrender.cli import main
 from skyrender.dem import DEM, fractal_terrain
 from skyrender.errors import InputError
-from skyrender.model import (CovisibilityParams, ModelParams, PeakParams, build_model, find_peaks,
-                             k_nearest_features, load_model, save_model)
-from skyrender.model.neighbours import most_covisible_features
+from skyrender.model import (
+    CovisibilityParams,
+    ModelParams,
+    PeakParams,
+    build_model,
+    find_peaks,
+    k_nearest_features,
+    load_model,
+    save_model,
+)
 from skyrender.model.covisibility import skyline_features
+from skyrender.model.neighbours import most_covisible_features
 from skyrender.render import Terrain
 
 CELL = 50.0

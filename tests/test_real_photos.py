@@ -84,6 +84,29 @@ def test_exif_35mm_focal_length_gives_the_upright_horizontal_fov(tmp_path):
     assert exif_fov(str(plain)) is None
 
 
+def test_localize_auto_preset_tells_camera_photos_from_renders(tmp_path):
+    from skyrender.features.photo_io import is_camera_photo
+
+    img = np.full((30, 40, 3), 128, np.uint8)
+    _jpeg_with_exif(str(tmp_path / "phone.jpg"), img, 1, f35=26)
+    import cv2
+
+    cv2.imwrite(str(tmp_path / "render.png"), img)
+    cv2.imwrite(str(tmp_path / "export.jpeg"), img)  # a JPEG is a photo even without EXIF
+    assert is_camera_photo(str(tmp_path / "phone.jpg")) and is_camera_photo(str(tmp_path / "export.jpeg"))
+    assert not is_camera_photo(str(tmp_path / "render.png"))
+
+
+def test_photo_models_are_cached_apart_from_render_models():
+    from skyrender.dem import load_dem
+    from skyrender.model import ModelParams, model_cache_key
+
+    dem = load_dem("builtin:jacksboro")
+    assert model_cache_key(dem) == dem.fingerprint()
+    photo = model_cache_key(dem, ModelParams.for_photos())
+    assert photo.startswith(dem.fingerprint() + "-") and photo == model_cache_key(dem, ModelParams.for_photos())
+
+
 def _write_geotiff(path, z, west, north, step):
     import rasterio
     from affine import Affine

@@ -30,8 +30,14 @@ from ..features import extract_skyline
 from ..localizer import LocalizeParams, localize
 from ..localizer.hypotheses import generate_hypotheses
 from ..localizer.pipeline import image_peaks
-from ..localizer.pose_solver import (_world_directions, angles_from_rotations, image_bearings, resection_2d,
-                                     rotations_from_bearings, solve_poses)
+from ..localizer.pose_solver import (
+    _world_directions,
+    angles_from_rotations,
+    image_bearings,
+    resection_2d,
+    rotations_from_bearings,
+    solve_poses,
+)
 from ..model import build_model
 from ..render import Terrain, render_skylines
 from ..render.photo import Look, render_photo

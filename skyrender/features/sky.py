@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+
 def pixel_features(image: np.ndarray) -> np.ndarray:
     """(H, W, 5) float32 features of an RGB uint8 image: L, a, b (CIE Lab, L in 0..100),
     local lightness std (7 x 7) and Sobel gradient magnitude of lightness."""
@@ -40,11 +41,10 @@ def pixel_features(image: np.ndarray) -> np.ndarray:
 
 def _fit_gmm(samples: np.ndarray, components: int, seed: int):
     """Full-covariance Gaussian mixture (scikit-learn), deterministic for a seed."""
-    from sklearn.mixture import GaussianMixture
-
     import warnings
 
     from sklearn.exceptions import ConvergenceWarning
+    from sklearn.mixture import GaussianMixture
 
     n = int(min(components, max(1, len(samples) // 50)))
     with warnings.catch_warnings():  # 50 EM steps are plenty for a probability map

@@ -28,7 +28,6 @@ import numpy as np
 from ..camera import Intrinsics
 from ..render import Terrain, render_skylines
 
-
 #: Horizontal shifts (px) tried when aligning a rendered skyline to the photo's.
 SHIFTS_PX = np.arange(-30.0, 30.01, 1.0)
 

@@ -20,7 +20,8 @@ from .horizons import HorizonParams, Horizons, build_horizons
 from .neighbours import k_nearest_features
 from .peaks import PeakParams, PeakTable, find_peaks
 
-__all__ = ["build_model", "cached_model", "Model", "ModelParams", "PeakParams", "CovisibilityParams", "load_model", "save_model",
+__all__ = ["build_model", "cached_model", "model_cache_key", "Model", "ModelParams", "PeakParams", "CovisibilityParams",
+           "load_model", "save_model",
            "find_peaks", "k_nearest_features", "learn_covisibility", "PeakTable", "Covisibility", "HorizonParams",
            "Horizons", "build_horizons"]
 
@@ -52,14 +53,20 @@ def model_cache_dir() -> Path:
     return Path(os.environ.get("SKYRENDER_CACHE", Path.home() / ".cache" / "skyrender"))
 
 
+def model_cache_key(dem: DEM, params: ModelParams = ModelParams()) -> str:
+    """The cache directory name of a model: the DEM's fingerprint, plus a hash of the
+    parameters where they are not the defaults."""
+    key = dem.fingerprint()
+    if params != ModelParams():
+        key += "-" + hashlib.sha1(json.dumps(params.to_dict(), sort_keys=True).encode()).hexdigest()[:10]
+    return key
+
+
 def cached_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None) -> Model:
     """The model of ``dem`` built with ``params`` from the cache (keyed by the DEM's
     fingerprint and the parameters), built and cached on first use; an unwritable
     cache only costs the rebuild next time."""
-    key = dem.fingerprint()
-    if params != ModelParams():
-        key += "-" + hashlib.sha1(json.dumps(params.to_dict(), sort_keys=True).encode()).hexdigest()[:10]
-    cache = model_cache_dir() / key
+    cache = model_cache_dir() / model_cache_key(dem, params)
     try:
         return load_model(cache, dem=dem, params=params)
     except InputError:

@@ -185,7 +185,8 @@ def load_model(model_dir, dem: DEM | None = None, params: ModelParams | None = N
         a = np.load(os.path.join(model_dir, "arrays.npz"), allow_pickle=False)
         arrays = {k: a[k] for k in a.files}
     except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
-        raise InputError(f"cannot read model arrays in {model_dir}: {str(exc).splitlines()[0] if str(exc) else type(exc).__name__}") from None
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputError(f"cannot read model arrays in {model_dir}: {reason}") from None
     required = ("id", "x", "y", "z", "row", "col", "prominence", "major", "together", "horizon_centres",
                 "horizon_elevation", "neighbours") + (() if dem is not None else ("elevation",))
     missing = [k for k in required if k not in arrays]

@@ -7,7 +7,8 @@ photos of the largest training place and web001-web034; the dev and validation s
 are never read) and, with ``--renders N``, renders with varied skies
 (:func:`skyrender.training.synthetic_skies.training_renders`: sunset silhouettes,
 overcast, haze, clouds on ridges, snow, power lines, occluders). The shipped weights use
-none: 60 renders lowered the dev figures (mean within 5 px 78.6 against 86.0 %). Each step takes one picture at a random width (352-544 px), flipped at
+none: 60 renders lowered the dev figures (mean within 5 px 78.6 against 86.0 %). Each step takes one picture at a
+random width (352-544 px), flipped at
 random, with random exposure, white balance, gamma, saturation and noise; the loss
 is the binary cross-entropy at half resolution, weighted 5x within 3 px of the
 boundary, and 0 where the truth is unknown (Web columns with no red mark).
@@ -139,7 +140,8 @@ def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: in
         y = torch.from_numpy(np.clip(lab, 0, 1))[None, None]
         wgt = torch.from_numpy(boundary_weight(lab, known))[None, None]
         logits = model(x)
-        loss = (torch.nn.functional.binary_cross_entropy_with_logits(logits, y, reduction="none") * wgt).sum() / wgt.sum().clamp(min=1)
+        per_pixel = torch.nn.functional.binary_cross_entropy_with_logits(logits, y, reduction="none")
+        loss = (per_pixel * wgt).sum() / wgt.sum().clamp(min=1)
         opt.zero_grad()
         loss.backward()
         opt.step()
@@ -170,7 +172,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=4000)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--renders", type=int, default=0, help="synthetic training renders with varied skies (60 lowered the dev figures: 78.6 against 86.0 %%)")
+    parser.add_argument("--renders", type=int, default=0,
+                        help="synthetic training renders with varied skies (60 lowered the dev figures: 78.6 against 86.0 %%)")
     parser.add_argument("--threads", type=int, default=1, help="PyTorch CPU threads (results depend on it)")
     parser.add_argument("--out", default=WEIGHTS)
     args = parser.parse_args(argv)

@@ -25,8 +25,15 @@ import numpy as np
 from ..benchmarks.skyline_photos import column_errors
 from ..datasets.real_photos import items_on_side
 from ..features.sky import pixel_features
-from ..features.skyline import (FITTED, _boundary, _edge_strength, _subpixel, boundary_skyline, confidence_features,
-                                net_probability)
+from ..features.skyline import (
+    FITTED,
+    _boundary,
+    _edge_strength,
+    _subpixel,
+    boundary_skyline,
+    confidence_features,
+    net_probability,
+)
 
 EDGE_BONUS = (16.0, 32.0, 64.0, 128.0)
 JUMP_COST = (0.5, 1.0, 2.0, 4.0)
