@@ -222,18 +222,18 @@ def test_a_twelve_megapixel_photo_is_extracted_on_a_reduced_copy_in_full_coordin
 def test_a_ch1_validation_photo_is_localized_within_a_kilometre():
     from skyrender.datasets.real_photos import items_on_side
     from skyrender.diagnostics.oracle import dem_around
-    from skyrender.localizer import localize
-    from skyrender.model import build_model
+    from skyrender.localizer import LocalizeParams, localize
+    from skyrender.model import ModelParams, build_model
     from skyrender.render import Terrain
 
     data_path("dem", "N46E007.hgt")
     item = next(i for i in items_on_side("validation", str(DATA / "photos")) if i.key == "ch1/dsc05274_01024")
     dem = dem_around(item.lat, item.lon, radius_km=20.0)
     terrain = Terrain(dem)
-    model = build_model(dem, terrain=terrain)
+    model = build_model(dem, ModelParams.for_photos(), terrain=terrain)
     image = load_photo(item.image_path)
     fov = float(np.degrees(2 * np.arctan(image.shape[1] / (2 * item.focal_px))))
-    result = localize(image, model, 2.0, fov, terrain=terrain)
+    result = localize(image, model, 2.0, fov, terrain=terrain, params=LocalizeParams.for_photos())
     x, y = (float(v) for v in dem.from_lonlat(item.lon, item.lat))
     assert result.localized
     assert np.hypot(result.pose[0] - x, result.pose[1] - y) < 1000.0

@@ -54,6 +54,9 @@ def _photo_margin_logit() -> tuple[float, float]:
 
 
 PHOTO_MARGIN_LOGIT = _photo_margin_logit()
+#: Abstain below this photo confidence: on the 16 CH1 training photos of the fit, the lowest
+#: threshold (rounded up) with no answer more than 1 km wrong (one scored 0.73, 15 km off).
+PHOTO_MIN_CONFIDENCE = 0.8
 
 
 @dataclass(frozen=True)
@@ -102,7 +105,7 @@ class LocalizeParams:
         logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`)."""
         return cls(skyline_method="net", max_hypotheses=0, final_refinements=8, max_refinements=4, max_horizon_refinements=16,
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=1000.0, confidence_model="margin",
-                   margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=0.5,
+                   margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,
                    horizon=HorizonSearchParams(tilts=(-10.0, 0.0, 10.0, 20.0, 30.0), terms=2, rank_by_cost=True))
 
 
