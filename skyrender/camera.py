@@ -1,4 +1,4 @@
-"""Camera model of CONTRACT.md: pose, intrinsics, axes, projection, rays.
+"""Camera model (README, Conventions): pose, intrinsics, axes, projection, rays.
 
 World frame: x east, y north, z up (metres). Angles in degrees:
 ``pan`` clockwise from grid north, ``tilt`` up from the horizontal,

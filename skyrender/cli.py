@@ -1,4 +1,4 @@
-"""The ``skyrender`` command line (CONTRACT.md).
+"""The ``skyrender`` command line (README, Command line).
 
 Every command prints a one-line error on stderr and exits with status 2 on
 bad input; ``--json`` prints exactly one JSON object on stdout.

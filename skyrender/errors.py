@@ -1,7 +1,7 @@
 """Errors that mean "the user gave us something we cannot use".
 
 The command line turns an :class:`InputError` into a one-line message on
-stderr and exit status 2 (CONTRACT.md); everything else is a bug.
+stderr and exit status 2 (README, Command line); everything else is a bug.
 """
 
 

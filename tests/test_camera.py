@@ -1,4 +1,4 @@
-"""Camera conventions of CONTRACT.md, checked with plain geometry."""
+"""Camera conventions (README, Conventions), checked with plain geometry."""
 
 from __future__ import annotations
 

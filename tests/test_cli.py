@@ -1,4 +1,4 @@
-"""The command line of CONTRACT.md: outputs, JSON, and one-line errors with exit 2."""
+"""The command line (README, Command line): outputs, JSON, and one-line errors with exit 2."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""DEM loading, georeferencing, repair, and the ground surface of CONTRACT.md."""
+"""DEM loading, georeferencing, repair, and the ground surface (README, Conventions)."""
 
 from __future__ import annotations
 

@@ -66,7 +66,7 @@ class PhotoItem:
         return mask
 
     def truth_skyline(self) -> np.ndarray:
-        """(W,) true skyline, v per column (CONTRACT conventions); NaN where unknown."""
+        """(W,) true skyline, v per column (README, Conventions); NaN where unknown."""
         import cv2
 
         if self.truth_kind == "mask":

@@ -1,6 +1,6 @@
 """The DEM object: an elevation grid in a projected, metric world frame.
 
-Conventions (CONTRACT.md): x = east, y = north, z = up, metres. Cells are
+Conventions (README): x = east, y = north, z = up, metres. Cells are
 areas (GDAL): ``transform`` maps (col, row) of the *outer corner* of the
 top-left cell; cell centres lie half a cell inside. Row 0 is the northern
 edge. The terrain surface is the triangle mesh with a vertex at every cell
@@ -112,7 +112,7 @@ class DEM:
         """Height g(x, y) of the terrain surface in metres; NaN outside the DEM.
 
         Vectorized over any broadcastable x, y. Exact on the triangle mesh of
-        CONTRACT.md (quads split south-west to north-east).
+        the README's Conventions (quads split south-west to north-east).
         """
         col, row = self.fractional_index(x, y)
         col, row = np.broadcast_arrays(col, row)

@@ -4,7 +4,7 @@ Readers: GeoTIFF, SRTM ``.hgt`` and ESRI ASCII grids through rasterio;
 ``.npy``/``.npz`` arrays with an explicit cell size; the built-in real DEM
 (matplotlib's Jacksboro fault, ``builtin:jacksboro``). A DEM in a geographic
 CRS is reprojected once, on load, to the WGS 84 / UTM zone holding its
-centre (CONTRACT.md), onto the largest axis-aligned grid lying inside the
+centre (README, Conventions), onto the largest axis-aligned grid lying inside the
 source tile, so no cell of the result is invented beyond the data.
 """
 
@@ -49,7 +49,7 @@ RASTER_SUFFIXES = (".hgt", ".tif", ".tiff", ".asc", ".vrt")
 
 def load_dem(path: str | os.PathLike | list | tuple | None = None, *, crs=None, cell_size: float | None = None,
              resolution: float | None = None, bounds: tuple[float, float, float, float] | None = None) -> DEM:
-    """Read a DEM into the world frame of CONTRACT.md, voids filled and spikes repaired.
+    """Read a DEM into the world frame of the README's Conventions, voids filled and spikes repaired.
 
     Parameters
     ----------

@@ -17,7 +17,7 @@ Photos wider than :attr:`SkylineParams.work_width` (a 12-megapixel phone photo) 
 processed on a reduced copy; the boundary is then refined at full resolution in a
 band around it, and returned in full-image coordinates.
 
-Output per CONTRACT.md: v per column (u = i + 0.5); NaN where a column sees
+Output per README, Conventions: v per column (u = i + 0.5); NaN where a column sees
 only sky; 0 where terrain reaches the top edge.
 """
 

@@ -17,7 +17,7 @@ five unknowns against six equations. Solved for all hypotheses at once:
    world directions; pan, tilt, swing read off it.
 4. Reprojection residual (px) of the three points: the hypothesis test.
 
-Conventions: CONTRACT.md (world x east, y north, z up; angles in degrees).
+Conventions: the README (world x east, y north, z up; angles in degrees).
 """
 
 from __future__ import annotations
@@ -213,7 +213,7 @@ def rotations_from_bearings(bearings: np.ndarray, directions: np.ndarray) -> np.
 
     Closed form: the same symmetric frame (:func:`_triad`) built from the bearings
     and from the directions is matched. The camera frame (right, up, forward) is
-    left-handed (CONTRACT.md: up = right x forward), so the bearing frame's third
+    left-handed (README, Conventions: up = right x forward), so the bearing frame's third
     axis is negated and R has determinant -1.
     """
     b1, b2, b3 = _triad(bearings)

@@ -67,7 +67,7 @@ class Photo:
     """A rendered photograph and its ground truth.
 
     image : (H, W, 3) uint8 sRGB.
-    skyline : (W,) the terrain's sub-pixel skyline (CONTRACT.md).
+    skyline : (W,) the terrain's sub-pixel skyline (README, Conventions).
     sky_boundary : (W,) boundary of the visible sky, occluders included.
     depth : (H, W) nearest terrain distance (m) among each pixel's samples; inf for sky.
     """

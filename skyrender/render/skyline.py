@@ -1,7 +1,7 @@
 """Rendered skylines: per-column binary search with ``scene.ray_test``.
 
 For every image column u = i + 0.5 we search the v where rays stop seeing
-sky and start hitting terrain (CONTRACT.md: NaN where the column sees only
+sky and start hitting terrain (README, Conventions: NaN where the column sees only
 sky, 0 where terrain reaches the top edge). Seen from above the ground, a
 column's rays hit terrain below one boundary and miss above it, so a
 bisection finds it with ~15 ray tests instead of H.

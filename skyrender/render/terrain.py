@@ -2,7 +2,7 @@
 
 Vertices sit at cell centres in coordinates *local* to the DEM (x, y minus
 the DEM centre) so float32 stays precise to millimetres; two triangles per
-quad, split south-west to north-east (CONTRACT.md). The mesh is built in
+quad, split south-west to north-east (README, Conventions). The mesh is built in
 memory (``mi.Mesh`` + ``mi.traverse``), not through a PLY file.
 
 Earth curvature without rebuilding the mesh per camera: the terrain a
@@ -44,7 +44,7 @@ class Terrain:
     Parameters
     ----------
     dem : the DEM.
-    curvature : apply earth curvature and refraction (CONTRACT.md); False = flat earth.
+    curvature : apply earth curvature and refraction (README, Conventions); False = flat earth.
     variant : Mitsuba variant (default: ``SKYRENDER_VARIANT`` or ``llvm_ad_rgb``).
     """
 
