@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: install demo test bench bench-render bench-skyline bench-localize bench-real oracle train-sky-net clean
+.PHONY: install demo test fuzz bench bench-render bench-skyline bench-localize bench-real oracle train-sky-net clean
 
 install: $(STAMP)
 
@@ -25,6 +25,10 @@ test: install
 	$(BIN)/python -m pytest -q
 
 bench: bench-render bench-skyline bench-localize
+
+# 1,000 malformed inputs across every command (seeded): exit 0/2/3, one stderr line, nothing else written
+fuzz: install
+	$(BIN)/python -m skyrender.diagnostics.fuzz --n 1000 --seed 0
 
 bench-skyline: install
 	$(BIN)/python -m skyrender.benchmarks.skyline_photos

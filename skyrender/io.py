@@ -1,10 +1,13 @@
-"""Reading and writing the small files of the CLI: skylines (.npy / JSON)."""
+"""Reading and writing the small files of the CLI: skylines (.npy / JSON); native stderr capture."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
+import sys
+import tempfile
 
 import numpy as np
 
@@ -72,3 +75,24 @@ def write_json(path, obj: dict) -> None:
             json.dump(obj, fh, indent=1)
     except OSError as exc:
         raise InputError(f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+@contextlib.contextmanager
+def captured_stderr():
+    """Capture everything written to stderr inside the block, by Python and by native
+    libraries (a decoder writing to file descriptor 2), into ``holder["text"]`` (set on
+    exit): the command line prints one line per error, so a library's own complaint must
+    not reach the terminal."""
+    holder = {"text": ""}
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        try:
+            os.dup2(tmp.fileno(), 2)
+            yield holder
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            holder["text"] = tmp.read().decode("utf-8", "replace")

@@ -526,3 +526,42 @@ def test_localizes_on_a_real_dem():
     result = localize(_photo(terrain, pose), model, 2.0, 60.0, terrain=terrain)
     _assert_close(result, pose)
     assert result.crs == "EPSG:32611"
+
+
+def test_the_same_inputs_give_byte_identical_outputs(scene, views, model_dir, tmp_path, capsys):
+    """Determinism: render (image and JSON), model (arrays and metadata apart from the
+    build time) and localize (JSON apart from ``seconds``) twice over the same inputs."""
+    from skyrender.dem import load_dem
+    from skyrender.model import ModelParams, PeakParams, build_model, save_model
+
+    _, terrain, _ = scene
+    pose = views.poses[2]
+    render = ["render", "--dem", "builtin:jacksboro", "--x", "746000", "--y", "4052000", "--height", "2", "--pan", "30",
+              "--tilt", "2", "--swing", "0", "--fov", "50", "--size", "96x64", "--seed", "5", "--json"]
+    outs = []
+    for i in range(2):
+        code, out, err = _run(capsys, render + ["--out", tmp_path / f"r{i}.png"])
+        assert code == 0, err
+        outs.append(out)
+    assert outs[0] == outs[1] and (tmp_path / "r0.png").read_bytes() == (tmp_path / "r1.png").read_bytes()
+    dem = load_dem("builtin:jacksboro")
+    for i in range(2):
+        save_model(build_model(dem, ModelParams(peaks=PeakParams(1800.0, 650.0))), tmp_path / f"m{i}")
+    assert (tmp_path / "m0" / "arrays.npz").read_bytes() == (tmp_path / "m1" / "arrays.npz").read_bytes()
+    metas = [json.loads((tmp_path / f"m{i}" / "model.json").read_text()) for i in range(2)]
+    for m in metas:
+        m.pop("build_seconds")
+    assert metas[0] == metas[1]
+    from skyrender.viz import write_image
+
+    write_image(tmp_path / "photo.png", _photo(terrain, pose))
+    docs = []
+    for _ in range(2):
+        code, out, err = _run(capsys, ["localize", tmp_path / "photo.png", "--model", model_dir, "--height", 2,
+                                       "--fov", 60, "--json"])
+        assert code == 0, err
+        doc = json.loads(out)
+        doc.pop("seconds")
+        docs.append(doc)
+    assert docs[0] == docs[1]
+    assert np.isfinite(docs[0]["x"])

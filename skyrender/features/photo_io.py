@@ -10,6 +10,7 @@ import os
 import numpy as np
 
 from ..errors import InputError
+from ..io import captured_stderr
 
 MIN_SIDE = 8  # smaller images hold no skyline worth the name
 
@@ -32,9 +33,13 @@ def load_photo(path) -> np.ndarray:
     except OSError as exc:
         raise InputError(f"{path}: cannot read the image ({exc.strerror or exc})") from None
     _check_complete(data, path)
-    image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+    with captured_stderr() as complaint:  # libpng / libjpeg / OpenCV print their own lines
+        image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
     if image is None:
         raise InputError(f"{path}: not an image that can be read")
+    said = " ".join(complaint["text"].split())
+    if said:  # decoded, but from damaged data: half an image would give a wrong skyline silently
+        raise InputError(f"{path}: corrupt image data ({said[:120]})")
     return upright(as_rgb8(image, name=path, bgr=True), exif_orientation(path))
 
 

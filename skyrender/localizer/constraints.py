@@ -112,3 +112,19 @@ def interfeature_visibility(terrain: Terrain, image_triples: np.ndarray, feature
     blocked = np.zeros(need.shape, dtype=bool)
     blocked[need] = ~clear[inverse]
     return ~blocked.any(axis=1)
+
+
+def in_image_geometry(poses: np.ndarray, points: np.ndarray, intrinsics: Intrinsics, curvature: bool,
+                      margin_px: float = 5.0) -> np.ndarray:
+    """(P,) bool: the pose (P, 6) is finite (inside the DEM) and its three matched points
+    (P, 3, 3) lie in front of the camera and within ``margin_px`` of the image."""
+    ok = np.isfinite(poses).all(axis=1)
+    if not ok.any():
+        return ok
+    out = np.zeros(len(poses), dtype=bool)
+    sub = np.flatnonzero(ok)
+    uv, _ = project(points[sub], poses[sub], intrinsics, curvature)
+    u, v = uv[..., 0], uv[..., 1]
+    inside = (u > -margin_px) & (u < intrinsics.width + margin_px) & (v > -margin_px) & (v < intrinsics.height + margin_px)
+    out[sub] = np.all(inside & np.isfinite(u), axis=1)
+    return out

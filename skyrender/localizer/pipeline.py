@@ -12,6 +12,13 @@ more chunks are tried (a pose tens to hundreds of metres off can fit a far
 foreground almost as well) and the best refined pose wins; its confidence falls
 when a distinct refined pose fits nearly as well. With the fov unknown, the
 far-horizon search also picks the focal lengths worth refining.
+
+:func:`localize` reads top to bottom as its stages: the image inputs,
+:func:`_three_point_hypotheses`, :func:`_far_horizon_candidates`,
+:func:`_three_point_rounds` (each chunk through :func:`_screen_chunk`: solver,
+constraints, verification; then refinement), the final refinements and
+:func:`_decide`. Real photographs use :meth:`LocalizeParams.for_photos`: far
+horizons only, and a confidence from the margin to the runner-up.
 """
 
 from __future__ import annotations
@@ -20,17 +27,18 @@ import json
 import math
 import os
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..camera import Intrinsics, project
+from ..camera import Intrinsics
 from ..errors import InputError
 from ..features import ExtractedSkyline, extract_skyline, load_photo, skyline_peaks
 from ..features.skyline import SkylineParams
 from ..model import Model
 from ..render import Terrain, render_skylines
-from .constraints import interfeature_visibility, prior_in_view, segments_in_sky, skyline_limit
+from .constraints import in_image_geometry, interfeature_visibility, prior_in_view, segments_in_sky, skyline_limit
 from .horizon_search import HorizonSearchParams, horizon_poses
 from .hypotheses import Hypotheses, generate_hypotheses
 from .pose_solver import solve_poses
@@ -88,6 +96,7 @@ class LocalizeParams:
     ordered: bool = True  # probabilistic ordering (False: a seeded arbitrary order)
     use_horizons: bool = True  # also match the skyline against the model's far horizons (no peaks needed)
     horizon: HorizonSearchParams = field(default_factory=HorizonSearchParams)
+    fov_candidates: tuple = FOV_CANDIDATES  # unknown fov: horizontal fovs (deg) tried first
     horizon_fov_step: tuple = (5.0, 2.5, 1.25)  # unknown fov: probes around the best fov of the far-horizon search
     refine_fov: bool = False  # a given fov is only a start (e.g. from EXIF): refinement fits the focal length too
     score: ScoreParams = field(default_factory=ScoreParams)
@@ -124,6 +133,15 @@ class LocalizeStats:
 
     def add_time(self, stage: str, seconds: float) -> None:
         self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
+
+    @contextmanager
+    def timed(self, stage: str):
+        """``with stats.timed("verification"):`` adds the block's wall seconds to that stage."""
+        tick = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.add_time(stage, time.perf_counter() - tick)
 
     def to_dict(self) -> dict:
         solve = self.seconds.get("pose_solver", 0.0)
@@ -229,6 +247,37 @@ def margin_confidence(best_score: float, runner_up_score: float, logit: tuple) -
     return float(1.0 / (1.0 + math.exp(-(a + b * margin))))
 
 
+@dataclass
+class _Search:
+    """What every stage of one localization reads: the photo's skyline and peaks, the
+    model and terrain, the fovs tried, the prior's features, the parameters and stats;
+    and what they build up: the candidates."""
+
+    model: Model
+    terrain: Terrain
+    height: float
+    fov: float | None  # given (None: unknown)
+    fovs: tuple  # tried
+    sky: np.ndarray
+    weights: np.ndarray
+    width: int
+    img_height: int
+    peak_uv: np.ndarray
+    in_sky: np.ndarray
+    in_view: np.ndarray | None
+    params: LocalizeParams
+    stats: LocalizeStats
+    curvature: bool
+    candidates: list = field(default_factory=list)
+
+    def intrinsics(self, fov: float) -> Intrinsics:
+        return Intrinsics.from_fov(fov, self.width, self.img_height)
+
+    @property
+    def fit_focal(self) -> bool:
+        return self.fov is None or self.params.refine_fov
+
+
 def localize(image, model: Model, height: float, fov: float | None = None, prior=None, *,
              terrain: Terrain | None = None, skyline=None, params: LocalizeParams = LocalizeParams(),
              curvature: bool = True) -> LocalizationResult:
@@ -253,149 +302,174 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
         raise InputError(f"camera height above ground must be >= 0 m, got {height}")
     t_start = time.perf_counter()
     stats = LocalizeStats()
-    tick = time.perf_counter()
-    sky, weights, W, H = _image_skyline(image, skyline, params.skyline_method)
-    fovs = (float(fov),) if fov is not None else FOV_CANDIDATES
-    intrinsics = Intrinsics.from_fov(fovs[0], W, H)
-    peaks = image_peaks(sky, params)
-    stats.add_time("image_features", time.perf_counter() - tick)
-    tick = time.perf_counter()
-    terrain = terrain if terrain is not None else Terrain(model.dem, curvature=curvature)
-    stats.add_time("terrain", time.perf_counter() - tick)
-
-    def abstain() -> LocalizationResult:
-        return LocalizationResult("abstained", None, None, 0.0, time.perf_counter() - t_start, stats.evaluated, stats,
-                                  intrinsics, sky)
-
-    tick = time.perf_counter()
+    with stats.timed("image_features"):
+        sky, weights, W, H = _image_skyline(image, skyline, params.skyline_method)
+        peaks = image_peaks(sky, params)
+    with stats.timed("terrain"):
+        terrain = terrain if terrain is not None else Terrain(model.dem, curvature=curvature)
     peak_uv = np.array([[p.u, p.v] for p in peaks]).reshape(-1, 2)
+    fovs = (float(fov),) if fov is not None else tuple(params.fov_candidates)
     in_view = model.features_for_prior(**prior) if prior else None
+    search = _Search(model, terrain, height, fov, fovs, sky, weights, W, H, peak_uv, segments_in_sky(peak_uv, sky), in_view,
+                     params, stats, curvature)
+    with stats.timed("hypotheses"):
+        hyps = _three_point_hypotheses(search, np.array([p.size for p in peaks]))
+    if params.use_horizons and len(model.horizons):
+        _far_horizon_candidates(search)
+    accepted = _three_point_rounds(search, hyps)
+    with stats.timed("refinement"):
+        final = params.final_refinements if accepted is None else 0
+        for cand in _next_to_refine(search.candidates, final, params, budgeted=False):
+            _refine(cand, search)
+    return _decide(search, accepted, t_start)
+
+
+def _three_point_hypotheses(search: _Search, peak_sizes: np.ndarray) -> Hypotheses:
+    """Stage 3a: (image triple, model triple) hypotheses, most probable first, at most
+    ``max_hypotheses``; none when the photo has fewer than three peaks."""
+    params = search.params
     hyps = Hypotheses(np.zeros((0, 3), np.int64), np.zeros((0, 3), np.int64), np.zeros(0))
-    if len(peaks) >= 3 and params.max_hypotheses > 0:
-        hyps = generate_hypotheses(peak_uv[:, 0], np.array([p.size for p in peaks]), model, in_view, params.ordered,
+    if len(search.peak_uv) >= 3 and params.max_hypotheses > 0:
+        hyps = generate_hypotheses(search.peak_uv[:, 0], peak_sizes, search.model, search.in_view, params.ordered,
                                    neighbours=params.neighbours, k=params.neighbours_k)
         hyps = hyps.take(slice(0, params.max_hypotheses))
-    in_sky = segments_in_sky(peak_uv, sky)
-    stats.generated = len(hyps) * len(fovs)
-    features = model.features.xyz
-    stats.add_time("hypotheses", time.perf_counter() - tick)
+    search.stats.generated = len(hyps) * len(search.fovs)
+    return hyps
 
-    candidates: list[_Candidate] = []
-    if params.use_horizons and len(model.horizons):
-        verified = {}  # fov -> (f_px, poses, plain score, trusted score)
 
-        def verify_horizons_at(fov_i: float) -> float:
-            """Far-horizon poses at one fov, verified; returns their best plain score (px)."""
-            k_i = Intrinsics.from_fov(fov_i, W, H)
-            tick = time.perf_counter()
-            poses, cost = horizon_poses(model.horizons, sky, weights, k_i, model.dem, height, params.horizon)
-            if in_view is not None and len(poses):
-                seen = prior_in_view(poses, features[in_view], sky, k_i, params.limit_tol_px, curvature)
+def _far_horizon_candidates(search: _Search) -> None:
+    """Stage 3c: poses from the far-horizon search at each fov tried (bisected around the
+    best when the fov is unknown), verified; the best of the best-fitting fov (two fovs
+    when unknown) join the candidates."""
+    params, stats, features = search.params, search.stats, search.model.features.xyz
+    verified = {}  # fov -> (f_px, poses, plain score, second ranking)
+
+    def verify_at(fov_i: float) -> float:
+        """Far-horizon poses at one fov, verified; returns their best plain score (px)."""
+        k_i = search.intrinsics(fov_i)
+        with stats.timed("horizon_search"):
+            poses, cost = horizon_poses(search.model.horizons, search.sky, search.weights, k_i, search.model.dem,
+                                        search.height, params.horizon)
+            if search.in_view is not None and len(poses):
+                seen = prior_in_view(poses, features[search.in_view], search.sky, k_i, params.limit_tol_px,
+                                     search.curvature)
                 poses, cost = poses[seen], cost[seen]
             stats.generated += len(poses)
-            stats.add_time("horizon_search", time.perf_counter() - tick)
-            tick = time.perf_counter()
-            score, trusted = verify_poses(terrain, poses, k_i, sky, weights, params.verify_stride, params=params.score)
+        with stats.timed("verification"):
+            score, trusted = verify_poses(search.terrain, poses, k_i, search.sky, search.weights, params.verify_stride,
+                                          params=params.score)
             if params.horizon.rank_by_cost:  # the second ranking: the search's own cost
                 trusted = cost
             stats.verified += len(poses)
             stats.horizon_poses += len(poses)
-            stats.add_time("verification", time.perf_counter() - tick)
-            verified[fov_i] = (k_i.f_px, poses, score, trusted)
-            return _best_of(score)
+        verified[fov_i] = (k_i.f_px, poses, score, trusted)
+        return _best_of(score)
 
-        for fov_i in fovs:
-            verify_horizons_at(fov_i)
-        if fov is None:
-            _narrow_fov(verified, verify_horizons_at, params.horizon_fov_step)
-        # a wrong focal length scales the skyline's azimuths: the best fits pick the fov
-        for fov_i in sorted(verified, key=lambda f: _best_of(verified[f][2]))[: 1 if fov is not None else 2]:
-            f_px, poses, score, trusted = verified[fov_i]
-            _add_candidates(candidates, poses, score, trusted, f_px, None, params)
+    for fov_i in search.fovs:
+        verify_at(fov_i)
+    if search.fov is None:
+        _narrow_fov(verified, verify_at, params.horizon_fov_step)
+    # a wrong focal length scales the skyline's azimuths: the best fits pick the fov
+    for fov_i in sorted(verified, key=lambda f: _best_of(verified[f][2]))[: 1 if search.fov is not None else 2]:
+        f_px, poses, score, trusted = verified[fov_i]
+        _add_candidates(search.candidates, poses, score, trusted, f_px, None, params)
+
+
+def _screen_chunk(search: _Search, chunk: Hypotheses, fov_i: float) -> None:
+    """Stages 3b-4a for one chunk of hypotheses at one fov: solve the poses, prune them
+    by residual, geometry, prior, "skyline is the limit" and inter-feature visibility,
+    verify the survivors and add the best as candidates."""
+    params, stats, features = search.params, search.stats, search.model.features.xyz
+    k_i = search.intrinsics(fov_i)
+    with stats.timed("pose_solver"):
+        poses, residual = solve_poses(search.model.dem, search.peak_uv[chunk.image], features[chunk.features],
+                                      search.height, k_i.f_px, k_i.cx, k_i.cy, search.curvature)
+        stats.evaluated += len(chunk)
+    with stats.timed("constraints"):
+        keep = residual <= params.residual_px
+        stats.rejected["residual"] += int((~keep).sum())
+        idx = np.flatnonzero(keep)
+        idx = _apply(idx, in_image_geometry(poses[idx], features[chunk.features[idx]], k_i, search.curvature), stats,
+                     "geometry")
+        if search.in_view is not None:
+            idx = _apply(idx, prior_in_view(poses[idx], features[search.in_view], search.sky, k_i, params.limit_tol_px,
+                                            search.curvature), stats, "prior")
+        idx = _apply(idx, skyline_limit(poses[idx], features, search.sky, k_i, params.limit_tol_px,
+                                        curvature=search.curvature), stats, "skyline_limit")
+    with stats.timed("visibility"):
+        idx = _apply(idx, interfeature_visibility(search.terrain, chunk.image[idx], chunk.features[idx], features,
+                                                  search.in_sky), stats, "interfeature_visibility")
+    if len(idx) == 0:
+        return
+    with stats.timed("verification"):
+        kept = idx[_dedupe(poses[idx])]
+        score, trusted = verify_poses(search.terrain, poses[kept], k_i, search.sky, search.weights,
+                                      params.verify_stride, params=params.score)
+        stats.verified += len(kept)
+        _add_candidates(search.candidates, poses[kept], score, trusted, k_i.f_px, features[chunk.features[kept]],
+                        params)
+
+
+def _three_point_rounds(search: _Search, hyps: Hypotheses) -> _Candidate | None:
+    """Hypotheses in chunks; after each, the best unrefined candidates are refined. Once
+    one is accepted (score and agreement), ``confirm_chunks`` more chunks are tried.
+    Returns the accepted candidate, or None."""
+    params = search.params
     accepted, stop_after = None, len(hyps)
     for start in range(0, len(hyps), params.chunk):
         if start >= stop_after:
             break
         chunk = hyps.take(slice(start, start + params.chunk))
-        for fov_i in fovs:
-            k_i = Intrinsics.from_fov(fov_i, W, H)
-            f_px = k_i.f_px
-            tick = time.perf_counter()
-            poses, residual = solve_poses(model.dem, peak_uv[chunk.image], features[chunk.features], height, f_px,
-                                          k_i.cx, k_i.cy, curvature)
-            stats.evaluated += len(chunk)
-            stats.add_time("pose_solver", time.perf_counter() - tick)
-            tick = time.perf_counter()
-            keep = residual <= params.residual_px
-            stats.rejected["residual"] += int((~keep).sum())
-            idx = np.flatnonzero(keep)
-            idx = _apply(idx, _geometry_ok(poses[idx], features[chunk.features[idx]], k_i, curvature), stats,
-                         "geometry")
-            if in_view is not None:
-                idx = _apply(idx, prior_in_view(poses[idx], features[in_view], sky, k_i, params.limit_tol_px,
-                                                curvature), stats, "prior")
-            idx = _apply(idx, skyline_limit(poses[idx], features, sky, k_i, params.limit_tol_px,
-                                            curvature=curvature), stats, "skyline_limit")
-            stats.add_time("constraints", time.perf_counter() - tick)
-            tick = time.perf_counter()
-            idx = _apply(idx, interfeature_visibility(terrain, chunk.image[idx], chunk.features[idx], features,
-                                                      in_sky), stats, "interfeature_visibility")
-            stats.add_time("visibility", time.perf_counter() - tick)
-            if len(idx) == 0:
-                continue
-            tick = time.perf_counter()
-            unique = _dedupe(poses[idx])
-            kept = idx[unique]
-            score, trusted = verify_poses(terrain, poses[kept], k_i, sky, weights, params.verify_stride,
-                                          params=params.score)
-            stats.verified += len(unique)
-            _add_candidates(candidates, poses[kept], score, trusted, f_px, features[chunk.features[kept]], params)
-            stats.add_time("verification", time.perf_counter() - tick)
-        candidates = [c for from_peaks in (True, False) for c in _best_by_either(
-            [c for c in candidates if (c.points is not None) == from_peaks], 8 * params.final_refinements)]
-        tick = time.perf_counter()
-        # once a pose is accepted, the confirming chunks refine new three-point candidates only:
-        # the far-horizon ones are the same in every chunk and their best have been refined
-        for cand in _next_to_refine(candidates, params.refine_per_chunk, params, horizons=accepted is None):
-            _refine(cand, terrain, intrinsics, height, sky, weights, fov is None or params.refine_fov, params, stats)
-        stats.add_time("refinement", time.perf_counter() - tick)
-        done = [c for c in candidates if c.refined is not None]
-        good = [c for c in done if c.refined.score <= params.accept_score_px
+        for fov_i in search.fovs:
+            _screen_chunk(search, chunk, fov_i)
+        search.candidates = [c for from_peaks in (True, False) for c in _best_by_either(
+            [c for c in search.candidates if (c.points is not None) == from_peaks], 8 * params.final_refinements)]
+        with search.stats.timed("refinement"):
+            # once a pose is accepted, the confirming chunks refine new three-point candidates only:
+            # the far-horizon ones are the same in every chunk and their best have been refined
+            for cand in _next_to_refine(search.candidates, params.refine_per_chunk, params, horizons=accepted is None):
+                _refine(cand, search)
+        good = [c for c in search.candidates if c.refined is not None and c.refined.score <= params.accept_score_px
                 and c.refined.agreement >= params.accept_agreement]
         if good:
             accepted = min(good, key=lambda c: c.refined.score)
             stop_after = min(stop_after, start + (1 + params.confirm_chunks) * params.chunk)
+    return accepted
 
-    tick = time.perf_counter()
-    final = params.final_refinements if accepted is None else 0
-    for cand in _next_to_refine(candidates, final, params, budgeted=False):
-        _refine(cand, terrain, intrinsics, height, sky, weights, fov is None or params.refine_fov, params, stats)
-    stats.add_time("refinement", time.perf_counter() - tick)
-    done = sorted([c for c in candidates if c.refined is not None], key=lambda c: c.refined.score)
-    if not done:
-        return abstain()
-    best = accepted or done[0]
-    if params.runner_up_m is None:
-        others = [c for c in done if c is not best and _distinct([best.refined.pose], c.refined.pose, params.same_pose_m)]
-    else:
-        others = [c for c in done if math.hypot(*(c.refined.pose[:2] - best.refined.pose[:2])) > params.runner_up_m]
-    runner_up = others[0].refined if others else None
-    stats.best_score, stats.runner_up_score = best.refined.score, runner_up.score if runner_up else None
-    if params.confidence_model == "margin":
-        confidence = margin_confidence(best.refined.score, runner_up.score if runner_up else np.inf, params.margin_logit)
-    else:
-        confidence = confidence_of(best.refined, runner_up)
-    if confidence < params.min_confidence:
-        return abstain()
+
+def _decide(search: _Search, accepted: _Candidate | None, t_start: float) -> LocalizationResult:
+    """Stage 4c: the best refined pose (the accepted one if any) with its confidence
+    against the runner-up, or an abstention below ``min_confidence``."""
+    params, stats, model = search.params, search.stats, search.model
+    W, H = search.width, search.img_height
+    done = sorted([c for c in search.candidates if c.refined is not None], key=lambda c: c.refined.score)
+    best = accepted or (done[0] if done else None)
+    confidence = 0.0
+    if best is not None:
+        if params.runner_up_m is None:
+            others = [c for c in done if c is not best and _distinct([best.refined.pose], c.refined.pose,
+                                                                     params.same_pose_m)]
+        else:
+            others = [c for c in done if math.hypot(*(c.refined.pose[:2] - best.refined.pose[:2])) > params.runner_up_m]
+        runner_up = others[0].refined if others else None
+        stats.best_score, stats.runner_up_score = best.refined.score, runner_up.score if runner_up else None
+        if params.confidence_model == "margin":
+            confidence = margin_confidence(best.refined.score, runner_up.score if runner_up else np.inf,
+                                           params.margin_logit)
+        else:
+            confidence = confidence_of(best.refined, runner_up)
+    if best is None or confidence < params.min_confidence:
+        return LocalizationResult("abstained", None, None, 0.0, time.perf_counter() - t_start, stats.evaluated, stats,
+                                  search.intrinsics(search.fovs[0]), search.sky)
     r = best.refined
     k_best = Intrinsics(W, H, r.f_px, W / 2.0, H / 2.0)
-    rendered = render_skylines(terrain, r.pose, k_best)
+    rendered = render_skylines(search.terrain, r.pose, k_best)
     lonlat = None
     if model.dem.crs is not None:
         lon, lat = model.dem.to_lonlat(r.pose[0], r.pose[1])
         lonlat = (float(lon), float(lat))
     return LocalizationResult("localized", r.pose, k_best.fov, confidence, time.perf_counter() - t_start,
-                              stats.evaluated, stats, k_best, sky, rendered, model.dem.crs, lonlat)
+                              stats.evaluated, stats, k_best, search.sky, rendered, model.dem.crs, lonlat)
 
 
 def _best_of(score: np.ndarray) -> float:
@@ -453,21 +527,6 @@ def _apply(idx: np.ndarray, ok: np.ndarray, stats: LocalizeStats, name: str) -> 
     return idx[ok]
 
 
-def _geometry_ok(poses: np.ndarray, points: np.ndarray, intrinsics: Intrinsics, curvature: bool,
-                 margin_px: float = 5.0) -> np.ndarray:
-    """Inside the DEM, and the three matched points in front and within the image."""
-    ok = np.isfinite(poses).all(axis=1)
-    if not ok.any():
-        return ok
-    out = np.zeros(len(poses), dtype=bool)
-    sub = np.flatnonzero(ok)
-    uv, _ = project(points[sub], poses[sub], intrinsics, curvature)
-    u, v = uv[..., 0], uv[..., 1]
-    inside = (u > -margin_px) & (u < intrinsics.width + margin_px) & (v > -margin_px) & (v < intrinsics.height + margin_px)
-    out[sub] = np.all(inside & np.isfinite(u), axis=1)
-    return out
-
-
 def _dedupe(poses: np.ndarray, cell_m: float = 50.0, cell_deg: float = 1.0) -> np.ndarray:
     """Indices of one pose per (x, y, pan) bin: many hypotheses give the same pose."""
     key = np.column_stack([np.floor(poses[:, 0] / cell_m), np.floor(poses[:, 1] / cell_m),
@@ -476,8 +535,10 @@ def _dedupe(poses: np.ndarray, cell_m: float = 50.0, cell_deg: float = 1.0) -> n
     return np.sort(first)
 
 
-def _refine(cand: _Candidate, terrain, intrinsics, height, sky, weights, fit_focal, params, stats) -> None:
-    cand.refined = refine_pose(terrain, cand.pose, intrinsics, height, sky, weights, fit_focal=fit_focal,
-                               f_px=cand.f_px, points=cand.points, params=params.score,
-                               give_up_px=params.give_up_sweep_px)
-    stats.refined += 1
+def _refine(cand: _Candidate, search: _Search) -> None:
+    """Refine one candidate (:func:`refine_pose`) from the first fov tried, with its own focal length."""
+    params = search.params
+    cand.refined = refine_pose(search.terrain, cand.pose, search.intrinsics(search.fovs[0]), search.height, search.sky,
+                               search.weights, fit_focal=search.fit_focal, f_px=cand.f_px, points=cand.points,
+                               params=params.score, give_up_px=params.give_up_sweep_px)
+    search.stats.refined += 1
