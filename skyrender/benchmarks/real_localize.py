@@ -105,6 +105,25 @@ def summary(rows: list[dict]) -> dict:
     return out
 
 
+def table(report: dict) -> str:
+    """The per-photo table and the summaries. An abstention's confidence is the one it
+    fell short with (from the best and runner-up scores the row keeps)."""
+    from ..localizer.pipeline import PHOTO_MARGIN_LOGIT, margin_confidence
+
+    lines = [f"{'photo':36s} {'fov':8s} {'status':10s} {'error m':>9s} {'conf':>5s} {'s':>6s}"]
+    for r in report["photos"]:
+        err = f"{r['error_m']:9.0f}" if "error_m" in r else f"{'-':>9s}"
+        conf = r["confidence"]
+        if r["status"] != "localized" and r.get("best_score") is not None:
+            conf = margin_confidence(r["best_score"], r.get("runner_up_score") or np.inf, PHOTO_MARGIN_LOGIT)
+        lines.append(f"{r['photo']:36s} {r['fov_mode']:8s} {r['status']:10s} {err} {conf:5.2f} {r['seconds']:6.1f}")
+    for m, s in report["summary"].items():
+        lines.append(f"{m} fov: {s['photos']} photos; within 100 m {100 * s['recall_100m']:.0f} %, 250 m "
+                     f"{100 * s['recall_250m']:.0f} %, 1 km {100 * s['recall_1000m']:.0f} %; abstained {s['abstained']}; "
+                     f"confident and > 1 km wrong {s['wrong_over_1km']}; median {s['median_seconds']:.1f} s")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--side", default="validation", choices=["train", "validation"])
@@ -112,6 +131,7 @@ def main(argv=None) -> int:
     parser.add_argument("--fov", nargs="+", default=["known", "unknown"], choices=["known", "unknown"])
     parser.add_argument("--unknown-every", type=int, default=1, help="the fov-unknown mode on every K-th photo only")
     parser.add_argument("--out", default=os.path.join(REPO, "experiments", "ch1"))
+    parser.add_argument("--retable", action="store_true", help="rewrite the text table from the run's JSON")
     args = parser.parse_args(argv)
     if not os.path.isdir(DEFAULT_PHOTOS):
         print(f"no photos at {DEFAULT_PHOTOS}")
@@ -119,18 +139,14 @@ def main(argv=None) -> int:
     items = [it for it in items_on_side(args.side) if it.key.startswith("ch1/")]
     if args.limit:
         items = items[:: max(1, len(items) // args.limit)][: args.limit]
-    rows = run(items, args.fov, unknown_every=max(1, args.unknown_every))
-    report = {"commit": git_commit(), "cpus": os.cpu_count(), "side": args.side, "photos": rows,
-              "summary": {m: summary([r for r in rows if r["fov_mode"] == m]) for m in args.fov}}
-    lines = [f"{'photo':36s} {'fov':8s} {'status':10s} {'error m':>9s} {'conf':>5s} {'s':>6s}"]
-    for r in rows:
-        err = f"{r['error_m']:9.0f}" if "error_m" in r else f"{'-':>9s}"
-        lines.append(f"{r['photo']:36s} {r['fov_mode']:8s} {r['status']:10s} {err} {r['confidence']:5.2f} {r['seconds']:6.1f}")
-    for m, s in report["summary"].items():
-        lines.append(f"{m} fov: {s['photos']} photos; within 100 m {100 * s['recall_100m']:.0f} %, 250 m "
-                     f"{100 * s['recall_250m']:.0f} %, 1 km {100 * s['recall_1000m']:.0f} %; abstained {s['abstained']}; "
-                     f"confident and > 1 km wrong {s['wrong_over_1km']}; median {s['median_seconds']:.1f} s")
-    text = "\n".join(lines)
+    if args.retable:  # rewrite the text table of a finished run from its JSON
+        with open(os.path.join(args.out, f"bench-real-{args.side}.json")) as f:
+            report = json.load(f)
+    else:
+        rows = run(items, args.fov, unknown_every=max(1, args.unknown_every))
+        report = {"commit": git_commit(), "cpus": os.cpu_count(), "side": args.side, "photos": rows}
+    report["summary"] = {m: summary([r for r in report["photos"] if r["fov_mode"] == m]) for m in args.fov}
+    text = table(report)
     print(text)
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, f"bench-real-{args.side}.json"), "w") as f:

@@ -459,8 +459,9 @@ def _decide(search: _Search, accepted: _Candidate | None, t_start: float) -> Loc
         else:
             confidence = confidence_of(best.refined, runner_up)
     if best is None or confidence < params.min_confidence:
-        return LocalizationResult("abstained", None, None, 0.0, time.perf_counter() - t_start, stats.evaluated, stats,
-                                  search.intrinsics(search.fovs[0]), search.sky)
+        # an abstention keeps the confidence it fell short with (0 when nothing was refined)
+        return LocalizationResult("abstained", None, None, confidence, time.perf_counter() - t_start, stats.evaluated,
+                                  stats, search.intrinsics(search.fovs[0]), search.sky)
     r = best.refined
     k_best = Intrinsics(W, H, r.f_px, W / 2.0, H / 2.0)
     rendered = render_skylines(search.terrain, r.pose, k_best)
