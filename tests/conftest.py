@@ -1,4 +1,5 @@
-"""Shared fixtures: the real data in ../shared/data, and terrains built once."""
+"""Shared fixtures: the real data in ../shared/data (tests about one of its files skip
+without it), and the built-in DEM's terrains, built once, for everything else."""
 
 from __future__ import annotations
 
@@ -20,34 +21,36 @@ def data_path(*parts: str) -> Path:
 
 
 @pytest.fixture(scope="session")
-def tujunga_dem():
+def view_dem():
+    """The built-in real DEM (matplotlib's Jacksboro fault, 30 x 30 km): renderer and
+    command-line tests run on it everywhere, with or without ../shared/data."""
     from skyrender.dem import load_dem
 
-    return load_dem(data_path("dem", "srtm_bigtujunga30m_utm11.tif"))
+    return load_dem("builtin:jacksboro")
 
 
 @pytest.fixture(scope="session")
-def tujunga_terrain(tujunga_dem):
+def view_terrain(view_dem):
     from skyrender.render import Terrain
 
-    return Terrain(tujunga_dem)
+    return Terrain(view_dem)
 
 
 @pytest.fixture(scope="session")
-def tujunga_terrain_flat(tujunga_dem):
+def view_terrain_flat(view_dem):
     from skyrender.render import Terrain
 
-    return Terrain(tujunga_dem, curvature=False)
+    return Terrain(view_dem, curvature=False)
 
 
 @pytest.fixture(scope="session")
-def tujunga_view(tujunga_dem):
-    """A camera in the Big Tujunga valley looking at the ridges, and 320x240 intrinsics."""
+def valley_view(view_dem):
+    """A camera on the lowest point of the DEM's central third looking at the ridges, and
+    320x240 intrinsics."""
     from skyrender.camera import Intrinsics
 
-    dem = tujunga_dem
+    dem = view_dem
     z = dem.elevation
-    # lowest point of the central third: a valley floor with ridges around it
     rows, cols = z.shape
     sub = z[rows // 3 : 2 * rows // 3, cols // 3 : 2 * cols // 3]
     r, c = np.unravel_index(np.argmin(sub), sub.shape)

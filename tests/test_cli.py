@@ -12,27 +12,25 @@ import pytest
 from skyrender.cli import main
 from skyrender.io import load_skyline
 
-from .conftest import data_path
-
 RENDER = ["render", "--height", "2", "--pan", "40", "--tilt", "4", "--swing", "0", "--fov", "60",
           "--size", "160x120"]
 
 
-def tujunga_args(tujunga_view):
-    pose, _ = tujunga_view
-    return ["--dem", str(data_path("dem", "srtm_bigtujunga30m_utm11.tif")), "--x", str(pose.x), "--y", str(pose.y)]
+def builtin_args(valley_view):
+    pose, _ = valley_view
+    return ["--dem", "builtin:jacksboro", "--x", str(pose.x), "--y", str(pose.y)]
 
 
-def test_render_writes_image_skyline_and_json(tmp_path, capsys, tujunga_view):
+def test_render_writes_image_skyline_and_json(tmp_path, capsys, valley_view):
     out, sky = tmp_path / "view.png", tmp_path / "sky.npy"
-    code = main(RENDER + tujunga_args(tujunga_view) + ["--out", str(out), "--skyline-out", str(sky), "--json"])
+    code = main(RENDER + builtin_args(valley_view) + ["--out", str(out), "--skyline-out", str(sky), "--json"])
     assert code == 0
     captured = capsys.readouterr()
     result = json.loads(captured.out)  # exactly one JSON object on stdout
     assert set(result) == {"x", "y", "z", "pan", "tilt", "swing", "fov", "width", "height", "crs"}
-    assert result["crs"] == "EPSG:32611" and result["width"] == 160 and result["height"] == 120
+    assert result["crs"] == "EPSG:32616" and result["width"] == 160 and result["height"] == 120
     assert result["fov"] == pytest.approx(60)
-    pose, _ = tujunga_view
+    pose, _ = valley_view
     assert result["z"] == pytest.approx(pose.z)
     import cv2
 
@@ -43,11 +41,11 @@ def test_render_writes_image_skyline_and_json(tmp_path, capsys, tujunga_view):
     assert np.isfinite(skyline).mean() > 0.9
 
 
-def test_render_accepts_lat_lon_and_json_skylines(tmp_path, capsys, tujunga_dem, tujunga_view):
-    pose, _ = tujunga_view
-    lon, lat = tujunga_dem.to_lonlat(pose.x, pose.y)
+def test_render_accepts_lat_lon_and_json_skylines(tmp_path, capsys, view_dem, valley_view):
+    pose, _ = valley_view
+    lon, lat = view_dem.to_lonlat(pose.x, pose.y)
     out, sky = tmp_path / "view.png", tmp_path / "sky.json"
-    args = RENDER + ["--dem", str(data_path("dem", "srtm_bigtujunga30m_utm11.tif")), "--lat", str(lat),
+    args = RENDER + ["--dem", "builtin:jacksboro", "--lat", str(lat),
                      "--lon", str(lon), "--out", str(out), "--skyline-out", str(sky), "--json"]
     assert main(args) == 0
     result = json.loads(capsys.readouterr().out)
@@ -63,10 +61,10 @@ def _bad(capsys, args):
 
 
 @pytest.mark.parametrize("case", ["missing", "text", "negative_fov", "outside", "bad_size", "no_position"])
-def test_bad_input_gives_one_line_and_exit_2(case, tmp_path, capsys, tujunga_view):
+def test_bad_input_gives_one_line_and_exit_2(case, tmp_path, capsys, valley_view):
     text = tmp_path / "notes.tif"
     text.write_text("this is not a DEM\n")
-    args = RENDER + tujunga_args(tujunga_view) + ["--out", str(tmp_path / "x.png")]
+    args = RENDER + builtin_args(valley_view) + ["--out", str(tmp_path / "x.png")]
     if case == "missing":
         args[args.index("--dem") + 1] = str(tmp_path / "nope.tif")
     elif case == "text":
@@ -88,8 +86,8 @@ def test_bad_input_gives_one_line_and_exit_2(case, tmp_path, capsys, tujunga_vie
     assert not (tmp_path / "x.png").exists()
 
 
-def test_unwritable_output_is_bad_input(capsys, tujunga_view, tmp_path):
-    args = RENDER + tujunga_args(tujunga_view) + ["--out", str(tmp_path / "no" / "such" / "dir" / "x.png")]
+def test_unwritable_output_is_bad_input(capsys, valley_view, tmp_path):
+    args = RENDER + builtin_args(valley_view) + ["--out", str(tmp_path / "no" / "such" / "dir" / "x.png")]
     code, err = _bad(capsys, args)
     assert code == 2 and "does not exist" in err
 

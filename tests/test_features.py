@@ -21,9 +21,9 @@ from .conftest import data_path
 
 
 @pytest.mark.parametrize("look", [Look(seed=1), Look(seed=2, noise=0.01, haze_distance=15_000.0, sun_elevation=12.0)])
-def test_skyline_of_a_rendered_photo_matches_its_truth(look, tujunga_terrain, tujunga_view):
-    pose, K = tujunga_view
-    photo = render_photo(tujunga_terrain, pose, K, look)
+def test_skyline_of_a_rendered_photo_matches_its_truth(look, view_terrain, valley_view):
+    pose, K = valley_view
+    photo = render_photo(view_terrain, pose, K, look)
     found = extract_skyline(photo.image)
     e = column_errors(found.skyline, photo.sky_boundary)
     assert np.median(e) < 1.0
@@ -31,19 +31,30 @@ def test_skyline_of_a_rendered_photo_matches_its_truth(look, tujunga_terrain, tu
     assert found.confidence.shape == (K.width,) and ((found.confidence >= 0) & (found.confidence <= 1)).all()
 
 
-def test_a_near_slope_reaching_the_top_of_the_frame_is_not_taken_for_sky(tujunga_terrain, tujunga_view):
-    pose, K = tujunga_view
-    pose = dataclasses.replace(pose, pan=280.0)  # facing the valley side
-    photo = render_photo(tujunga_terrain, pose, K, Look(seed=1))
+def test_a_near_slope_reaching_the_top_of_the_frame_is_not_taken_for_sky(view_terrain, valley_view):
+    pose, K = valley_view
+    pose = dataclasses.replace(pose, pan=300.0, tilt=-10.0)  # facing the valley side, looking down it
+    photo = render_photo(view_terrain, pose, K, Look(seed=1))
     assert np.mean(photo.sky_boundary <= 0.5) > 0.1  # terrain fills the top of some columns
     e = column_errors(extract_skyline(photo.image).skyline, photo.sky_boundary)
     assert np.median(e) < 1.0  # the smooth slope touching the top edge once became sky: 120+ px
     assert np.mean(e <= 5) >= 0.7
 
 
-def test_foreground_occluders_are_part_of_the_extracted_skyline(tujunga_terrain, tujunga_view):
-    pose, K = tujunga_view
-    photo = render_photo(tujunga_terrain, pose, K, Look(seed=3, occluders=0.2))
+@pytest.mark.xfail(strict=True, reason="issue 18: on the built-in DEM, looking down the valley with the slope "
+                   "filling the top of 61 % of the columns, gmm puts the skyline 162 px low (median)")
+def test_a_slope_filling_most_of_the_top_of_the_frame_is_not_taken_for_sky(view_terrain, valley_view):
+    pose, K = valley_view
+    pose = dataclasses.replace(pose, pan=280.0, tilt=-10.0)
+    photo = render_photo(view_terrain, pose, K, Look(seed=1))
+    assert np.mean(photo.sky_boundary <= 0.5) > 0.5
+    e = column_errors(extract_skyline(photo.image).skyline, photo.sky_boundary)
+    assert np.median(e) < 1.0
+
+
+def test_foreground_occluders_are_part_of_the_extracted_skyline(view_terrain, valley_view):
+    pose, K = valley_view
+    photo = render_photo(view_terrain, pose, K, Look(seed=3, occluders=0.2))
     found = extract_skyline(photo.image).skyline
     tall = photo.sky_boundary < photo.skyline - 6  # trees/posts rising 6+ px above the terrain
     assert tall.mean() > 0.1

@@ -12,8 +12,6 @@ from skyrender.render import Terrain, render_skylines
 from skyrender.render.photo import Look, cast_pixel_rays, render_photo
 from skyrender.render.visibility import line_of_sight
 
-from .conftest import data_path
-
 
 def first_hit_rows(t: np.ndarray) -> np.ndarray:
     """Skyline of a one-sample-per-pixel full render: the first terrain row per column."""
@@ -24,9 +22,9 @@ def first_hit_rows(t: np.ndarray) -> np.ndarray:
 
 
 @pytest.mark.parametrize("curved", [True, False])
-def test_ray_hits_project_back_to_their_pixels(curved, tujunga_terrain, tujunga_terrain_flat, tujunga_view):
-    terrain = tujunga_terrain if curved else tujunga_terrain_flat
-    pose, K = tujunga_view
+def test_ray_hits_project_back_to_their_pixels(curved, view_terrain, view_terrain_flat, valley_view):
+    terrain = view_terrain if curved else view_terrain_flat
+    pose, K = valley_view
     t, points, _, _ = cast_pixel_rays(terrain, pose, K, supersample=1)
     hit = np.isfinite(t)
     assert 0.2 < hit.mean() < 0.95  # both terrain and sky in view
@@ -40,63 +38,63 @@ def test_ray_hits_project_back_to_their_pixels(curved, tujunga_terrain, tujunga_
     assert np.nanmax(np.abs(points[hit, 2] - g)) < 0.05
 
 
-def test_integer_skyline_equals_the_full_render(tujunga_terrain, tujunga_view):
-    pose, K = tujunga_view
-    t, _, _, _ = cast_pixel_rays(tujunga_terrain, pose, K, supersample=1)
+def test_integer_skyline_equals_the_full_render(view_terrain, valley_view):
+    pose, K = valley_view
+    t, _, _, _ = cast_pixel_rays(view_terrain, pose, K, supersample=1)
     full = first_hit_rows(t)
-    bisected = render_skylines(tujunga_terrain, pose, K, subpixel=False)
+    bisected = render_skylines(view_terrain, pose, K, subpixel=False)
     np.testing.assert_array_equal(bisected, full)
 
 
-def test_subpixel_skyline_brackets_the_boundary_within_tolerance(tujunga_terrain, tujunga_view):
-    pose, K = tujunga_view
-    sky = render_skylines(tujunga_terrain, pose, K, subpixel=True, tol=0.02)
+def test_subpixel_skyline_brackets_the_boundary_within_tolerance(view_terrain, valley_view):
+    pose, K = valley_view
+    sky = render_skylines(view_terrain, pose, K, subpixel=True, tol=0.02)
     inner = np.isfinite(sky) & (sky > 0.1) & (sky < K.height - 0.1)
     assert inner.mean() > 0.9
     u = np.arange(K.width)[inner] + 0.5
     origin = np.broadcast_to(pose.array()[:3], (inner.sum(), 3))
-    above = tujunga_terrain.ray_test(origin, pixel_directions(u, sky[inner] - 0.05, pose, K))
-    below = tujunga_terrain.ray_test(origin, pixel_directions(u, sky[inner] + 0.05, pose, K))
+    above = view_terrain.ray_test(origin, pixel_directions(u, sky[inner] - 0.05, pose, K))
+    below = view_terrain.ray_test(origin, pixel_directions(u, sky[inner] + 0.05, pose, K))
     assert not above.any() and below.all()
-    integer = render_skylines(tujunga_terrain, pose, K, subpixel=False)
+    integer = render_skylines(view_terrain, pose, K, subpixel=False)
     assert np.nanmax(np.abs(sky - integer)) <= 1.0
 
 
 @pytest.mark.parametrize("subpixel", [True, False])
-def test_skyline_distances_equal_an_independent_ray_cast(subpixel, tujunga_terrain, tujunga_view):
+def test_skyline_distances_equal_an_independent_ray_cast(subpixel, view_terrain, valley_view):
     """The distance returned with the skyline is the first hit of a ray just below the
     boundary, cast again here with Terrain.intersect; the skyline itself is unchanged."""
-    pose, K = tujunga_view
-    sky, distance = render_skylines(tujunga_terrain, pose, K, subpixel=subpixel, with_distance=True)
-    np.testing.assert_array_equal(sky, render_skylines(tujunga_terrain, pose, K, subpixel=subpixel))
+    pose, K = valley_view
+    sky, distance = render_skylines(view_terrain, pose, K, subpixel=subpixel, with_distance=True)
+    np.testing.assert_array_equal(sky, render_skylines(view_terrain, pose, K, subpixel=subpixel))
     seen = np.isfinite(sky)
     assert seen.mean() > 0.9 and np.isinf(distance[~seen]).all()
     u = np.arange(K.width)[seen] + 0.5
     v = sky[seen] + (0.5 if not subpixel else 0.03)
     origin = np.broadcast_to(pose.array()[:3], (seen.sum(), 3))
-    t, _, _ = tujunga_terrain.intersect(origin, pixel_directions(u, v, pose, K))
+    t, _, _ = view_terrain.intersect(origin, pixel_directions(u, v, pose, K))
     # a ray grazing the ridge can hit it or the slope behind: compare where the two agree to 1 %
     close = np.abs(t - distance[seen]) <= 0.01 * t
     assert close.mean() > 0.9
     assert np.all((distance[seen] > 0) & np.isfinite(distance[seen]))
 
 
-def test_batched_skylines_equal_one_by_one(tujunga_terrain, tujunga_view):
-    pose, K = tujunga_view
+def test_batched_skylines_equal_one_by_one(view_terrain, valley_view):
+    pose, K = valley_view
     poses = np.tile(pose.array(), (5, 1))
     poses[:, 3] += np.arange(5) * 7.0
     poses[:, 5] = [-10, -3, 0, 4, 10]
-    batch = render_skylines(tujunga_terrain, poses, K)
+    batch = render_skylines(view_terrain, poses, K)
     for i in range(5):
-        np.testing.assert_allclose(batch[i], render_skylines(tujunga_terrain, Pose.from_array(poses[i]), K),
+        np.testing.assert_allclose(batch[i], render_skylines(view_terrain, Pose.from_array(poses[i]), K),
                                    atol=1e-4, equal_nan=True)
 
 
-def test_positive_tilt_moves_the_skyline_down(tujunga_terrain, tujunga_view):
-    pose, K = tujunga_view
-    s0 = render_skylines(tujunga_terrain, pose, K)
+def test_positive_tilt_moves_the_skyline_down(view_terrain, valley_view):
+    pose, K = valley_view
+    s0 = render_skylines(view_terrain, pose, K)
     tilted = Pose(pose.x, pose.y, pose.z, pose.pan, pose.tilt + 3.0, pose.swing)
-    s3 = render_skylines(tujunga_terrain, tilted, K)
+    s3 = render_skylines(view_terrain, tilted, K)
     assert np.nanmedian(s3 - s0) == pytest.approx(K.f_px * np.tan(np.radians(3)), rel=0.05)
 
 
@@ -150,16 +148,16 @@ def test_curvature_lowers_a_distant_ridge_by_the_formula():
     assert results[True] - results[False] == pytest.approx(drop_px, abs=0.05)
 
 
-def test_a_spike_in_the_dem_renders_no_phantom_ridge(tmp_path, tujunga_view):
-    pose, K = tujunga_view
-    dem = load_dem(data_path("dem", "srtm_bigtujunga30m_utm11.tif"))
+def test_a_spike_in_the_dem_renders_no_phantom_ridge(tmp_path, view_dem, valley_view):
+    pose, K = valley_view
+    dem = view_dem
     # put a 32767 cell 3 km in front of the camera
     _, _, f = camera_axes(pose.pan, 0, 0)
     col, row = (int(v) for v in dem.fractional_index(pose.x + 3000 * f[0], pose.y + 3000 * f[1]))
     z = dem.elevation.copy()
     z[row, col] = 32767
     path = tmp_path / "spiked.npz"
-    np.savez(path, elevation=z, cell_size=30.0, x_origin=dem.transform.c, y_origin=dem.transform.f,
+    np.savez(path, elevation=z, cell_size=dem.cell_size[0], x_origin=dem.transform.c, y_origin=dem.transform.f,
              crs=dem.crs)
     spiked = load_dem(path)
     assert spiked.repair.spikes_repaired == 1
@@ -172,8 +170,8 @@ def test_a_spike_in_the_dem_renders_no_phantom_ridge(tmp_path, tujunga_view):
     assert np.nanmin(raw_sky) < np.nanmin(clean_sky) - 20
 
 
-def test_mitsuba_camera_frame_matches_the_contract_rays(tujunga_terrain):
-    mi = tujunga_terrain.mi
+def test_mitsuba_camera_frame_matches_the_contract_rays(view_terrain):
+    mi = view_terrain.mi
     pose = Pose(10.0, 20.0, 30.0, 220.0, 6.0, -9.0)
     K = Intrinsics.from_fov(55, 320, 240)
     sensor = mi.load_dict({
@@ -193,8 +191,8 @@ def test_mitsuba_camera_frame_matches_the_contract_rays(tujunga_terrain):
                                atol=1e-4)
 
 
-def test_line_of_sight_agrees_with_sampling_the_ground(tujunga_dem, tujunga_terrain_flat):
-    dem = tujunga_dem
+def test_line_of_sight_agrees_with_sampling_the_ground(view_dem, view_terrain_flat):
+    dem = view_dem
     rng = np.random.default_rng(7)
     xmin, xmax, ymin, ymax = dem.extent
     n = 300
@@ -202,7 +200,7 @@ def test_line_of_sight_agrees_with_sampling_the_ground(tujunga_dem, tujunga_terr
     ay, by = rng.uniform(ymin + 100, ymax - 100, (2, n))
     a = np.column_stack([ax, ay, dem.ground(ax, ay) + rng.uniform(2, 300, n)])
     b = np.column_stack([bx, by, dem.ground(bx, by) + rng.uniform(2, 300, n)])
-    clear = line_of_sight(tujunga_terrain_flat, a, b, lift_m=0.0, end_margin_m=0.0)
+    clear = line_of_sight(view_terrain_flat, a, b, lift_m=0.0, end_margin_m=0.0)
     s = np.linspace(0, 1, 4000)[None, :, None]
     seg = a[:, None, :] + s * (b - a)[:, None, :]
     gap = seg[..., 2] - dem.ground(seg[..., 0], seg[..., 1])
@@ -212,11 +210,11 @@ def test_line_of_sight_agrees_with_sampling_the_ground(tujunga_dem, tujunga_terr
     np.testing.assert_array_equal(clear[clear_margin], brute[clear_margin])
 
 
-def test_photo_is_deterministic_and_its_skyline_is_the_sky_boundary(tujunga_terrain, tujunga_view):
-    pose, K = tujunga_view
+def test_photo_is_deterministic_and_its_skyline_is_the_sky_boundary(view_terrain, valley_view):
+    pose, K = valley_view
     look = Look(noise=0.02, occluders=0.2, seed=11)
-    a = render_photo(tujunga_terrain, pose, K, look)
-    b = render_photo(tujunga_terrain, pose, K, look)
+    a = render_photo(view_terrain, pose, K, look)
+    b = render_photo(view_terrain, pose, K, look)
     np.testing.assert_array_equal(a.image, b.image)
     assert a.image.shape == (K.height, K.width, 3) and a.image.dtype == np.uint8
     occluded = a.sky_boundary < a.skyline - 0.5
@@ -230,7 +228,7 @@ def test_photo_is_deterministic_and_its_skyline_is_the_sky_boundary(tujunga_terr
     assert (img[sky][:, 2] > img[sky][:, 0]).mean() > 0.95
 
 
-def test_far_horizons_equal_a_march_over_the_dem(tujunga_terrain):
+def test_far_horizons_equal_a_march_over_the_dem(view_terrain):
     """Panoramic far horizons (near clip 1 km) against an independent computation: the
     largest apparent elevation angle of the DEM surface (earth curvature and refraction
     applied) sampled every 5 m along each azimuth from 1 km out. Without the clip the
@@ -238,11 +236,11 @@ def test_far_horizons_equal_a_march_over_the_dem(tujunga_terrain):
     from skyrender.camera import earth_drop
     from skyrender.render.horizon import render_horizons
 
-    dem = tujunga_terrain.dem
+    dem = view_terrain.dem
     cx, cy = dem.centre
     centres = np.array([[x, y, float(dem.ground(x, y)) + 2.0] for x, y in ((cx, cy), (cx - 3000.0, cy + 2000.0))])
-    far = render_horizons(tujunga_terrain, centres, bin_deg=2.0, near_m=1000.0)
-    full = render_horizons(tujunga_terrain, centres, bin_deg=2.0)
+    far = render_horizons(view_terrain, centres, bin_deg=2.0, near_m=1000.0)
+    full = render_horizons(view_terrain, centres, bin_deg=2.0)
     assert far.shape == (2, 180)
     assert (full >= far - 0.05).all()
     assert (full > far + 1.0).any()  # the near terrain matters somewhere
