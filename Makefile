@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: install demo test fuzz bench bench-render bench-skyline bench-localize bench-real oracle train-sky-net clean
+.PHONY: install demo test fuzz fit-photo-confidence bench bench-render bench-skyline bench-localize bench-real oracle train-sky-net clean
 
 install: $(STAMP)
 
@@ -35,7 +35,7 @@ bench-skyline: install
 
 # real photos (CH1 validation side) localized against an SRTM mosaic around each place
 bench-real: install
-	$(BIN)/python -m skyrender.benchmarks.real_localize --side validation
+	$(BIN)/python -m skyrender.benchmarks.real_localize --side validation --unknown-every 10
 
 # the best fit of each CH1 training photo at its true position (what a localizer can hope for)
 oracle: install
@@ -43,6 +43,10 @@ oracle: install
 
 bench-localize: install
 	$(BIN)/python -m skyrender.benchmarks.localizer
+
+# refit the photo confidence of the localizer on 16 CH1 photos of the training side (~12 min)
+fit-photo-confidence: install
+	$(BIN)/python -m skyrender.training.localize_fit --limit 16
 
 # retrain the sky network and refit the boundary search on the training split (CPU, ~10 min);
 # reproduces skyrender/features/weights/ for the seed

@@ -300,6 +300,34 @@ def localize(
     return 0 if result.localized else 3
 
 
+@app.command()
+def mesh(
+    dem: str = typer.Argument(..., help="DEM file(s), a directory of tiles, a VRT, or builtin:jacksboro"),
+    out: Path = typer.Option(..., "--out", help="mesh file to write: .ply, .obj or .glb"),
+    world: bool = typer.Option(False, "--world", help="world coordinates (default: local to the DEM centre, "
+                               "as the float32 renderer uses them)"),
+    curvature: bool = typer.Option(False, "--curvature", help="lower the terrain by earth curvature and refraction "
+                                   "as seen from the DEM centre"),
+    json_out: bool = typer.Option(False, "--json", help="print the summary as one JSON object"),
+    crs: Optional[str] = CrsOpt,
+    cell_size: Optional[float] = CellOpt,
+):
+    """Export the terrain mesh (trimesh) and, for PLY/OBJ, a Mitsuba scene XML beside it."""
+    from .dem import load_dem
+    from .render.mesh_export import MESH_SUFFIXES, export_terrain
+
+    _check_writable(out, "--out", MESH_SUFFIXES)
+    terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
+    written = export_terrain(terrain_dem, str(out), world=world, curvature=curvature)
+    rows, cols = terrain_dem.shape
+    summary = {"files": written, "vertices": rows * cols, "faces": 2 * (rows - 1) * (cols - 1),
+               "origin_xy": [0.0, 0.0] if world else [float(v) for v in terrain_dem.centre], "crs": terrain_dem.crs}
+    if json_out:
+        emit_json(summary)
+    else:
+        typer.echo(f"wrote {', '.join(written)}: {summary['vertices']} vertices, {summary['faces']} triangles")
+
+
 def _parse_prior(prior_peak, prior_near) -> dict | None:
     prior: dict = {}
     if prior_peak:
