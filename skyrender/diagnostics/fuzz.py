@@ -258,6 +258,8 @@ def make_cases(work: str, n: int, seed: int, valid_model: str) -> list[Case]:
                                                                   "--height", "2", "--pan", "45", "--tilt", "0",
                                                                   "--swing", "0", "--fov", "50", "--size", "32x24",
                                                                   "--out", "r.png", "--json"], ("r.png",)))
+    for d in dems[::4]:
+        cases.append(Case(f"mesh {os.path.basename(d)}", ["mesh", d, "--out", "t.ply"], ("t.ply", "t.xml")))
     for img in images:
         cases.append(Case(f"skyline {os.path.basename(img)}", ["skyline", img, "--json"]))
     for m in models:
