@@ -8,8 +8,10 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import sys
 import time
+import warnings
 from pathlib import Path
 from typing import Optional
 
@@ -197,14 +199,22 @@ def model(
         raise InputError("--minor-radius must not exceed --major-radius")
     if camera_height < 0 or min_prominence < 0:
         raise InputError("--camera-height and --min-prominence must be >= 0")
+    if k < 2:
+        raise InputError(f"--k must be at least 2 (a pivot and two neighbours make a triple), got {k}")
+    created = not out.exists()
     _check_model_dir(out)
-    mitsuba(variant)
-    t0 = time.perf_counter()
-    terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
-    params = ModelParams(PeakParams(major_radius, minor_radius, min_prominence), k,
-                         CovisibilityParams(spacing, camera_height, max_range), HorizonParams(height=camera_height))
-    built = build_model(terrain_dem, params, progress=progress and not json_out)
-    save_model(built, out)
+    try:
+        mitsuba(variant)
+        t0 = time.perf_counter()
+        terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
+        params = ModelParams(PeakParams(major_radius, minor_radius, min_prominence), k,
+                             CovisibilityParams(spacing, camera_height, max_range), HorizonParams(height=camera_height))
+        built = build_model(terrain_dem, params, progress=progress and not json_out)
+        save_model(built, out)
+    except BaseException:
+        if created:  # a failed build leaves nothing behind
+            shutil.rmtree(out, ignore_errors=True)
+        raise
     seconds = time.perf_counter() - t0
     rows, cols = terrain_dem.shape
     if json_out:
@@ -255,8 +265,8 @@ def localize(
 
     if (model_dir is None) == (dem is None):
         raise InputError("give exactly one of --model MODEL_DIR and --dem DEM")
-    if not (np.isfinite(height) and height >= 0):
-        raise InputError(f"--height must be >= 0 m, got {height}")
+    if not (np.isfinite(height) and 0 <= height <= MAX_HEIGHT_M):
+        raise InputError(f"--height must lie in [0, {MAX_HEIGHT_M:.0f}] m above ground, got {height}")
     if fov is not None and not (0 < fov < 180):
         raise InputError(f"--fov must lie in (0, 180) degrees, got {fov}")
     for path, option, kinds in ((overlay, "--overlay", IMAGE_SUFFIXES), (geojson, "--geojson", (".geojson", ".json"))):
@@ -367,6 +377,8 @@ def _check_model_dir(path: Path) -> None:
         raise InputError(f"--out: {path} is not writable")
 
 
+#: Highest camera height above ground accepted (m): beyond it the terrain is a speck.
+MAX_HEIGHT_M = 20_000.0
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".bmp", ".webp")
 SKYLINE_SUFFIXES = (".npy", ".json")
 
@@ -406,7 +418,9 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point: run the app, turning bad input into one line and exit status 2."""
     command = typer.main.get_command(app)
     try:
-        rv = command.main(args=argv, prog_name="skyrender", standalone_mode=False)
+        with warnings.catch_warnings():  # a library's warning is not ours to print: one line per error
+            warnings.simplefilter("ignore")
+            rv = command.main(args=argv, prog_name="skyrender", standalone_mode=False)
         return int(rv) if isinstance(rv, int) else 0
     except InputError as exc:
         _fail(str(exc))

@@ -174,13 +174,19 @@ def _load_array(path: str, *, crs, cell_size: float | None) -> DEM:
         key = "elevation" if "elevation" in keys else (keys[0] if keys else None)
         if key is None:
             raise InputError(f"{path}: empty .npz archive")
-        z = data[key]
-        if cell_size is None and "cell_size" in keys:
-            cell_size = float(data["cell_size"])
-        x0 = float(data["x_origin"]) if "x_origin" in keys else 0.0
-        y0 = float(data["y_origin"]) if "y_origin" in keys else None
-        if crs is None and "crs" in keys:
-            crs = str(data["crs"])
+        try:  # members are read (and their CRCs and headers checked) only now
+            z = data[key]
+            if cell_size is None and "cell_size" in keys:
+                cell_size = float(data["cell_size"])
+            x0 = float(data["x_origin"]) if "x_origin" in keys else 0.0
+            y0 = float(data["y_origin"]) if "y_origin" in keys else None
+            if crs is None and "crs" in keys:
+                crs = str(data["crs"])
+        except MemoryError:
+            raise InputError(f"{path}: the array does not fit in memory") from None
+        except Exception as exc:  # BadZipFile, a garbled .npy header, zlib errors, ...: a damaged archive
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise InputError(f"{path}: damaged .npz archive ({reason[:100]})") from None
     else:
         z, y0 = data, None
     if not np.issubdtype(np.asarray(z).dtype, np.number) or np.ndim(z) != 2:
