@@ -12,35 +12,20 @@ from skyrender.errors import InputError
 from .conftest import data_path
 
 
-def test_geotiff_utm_loads_with_its_crs_size_and_range():
+def test_the_shared_real_dems_load_with_their_known_crs_size_range_and_repairs():
+    """Facts of the real DEMs in ../shared/data (one test about those files: it skips as a
+    whole without them; the format behaviours below run on synthetic files everywhere)."""
     dem = load_dem(data_path("dem", "srtm_bigtujunga30m_utm11.tif"))
-    assert dem.crs == "EPSG:32611"
-    assert dem.shape == (643, 1197)
-    assert dem.cell_size == (30.0, 30.0)
-    assert dem.elevation.min() == pytest.approx(315, abs=0.5)
-    assert dem.elevation.max() == pytest.approx(2295, abs=0.5)
+    assert dem.crs == "EPSG:32611" and dem.shape == (643, 1197) and dem.cell_size == (30.0, 30.0)
+    assert dem.elevation.min() == pytest.approx(315, abs=0.5) and dem.elevation.max() == pytest.approx(2295, abs=0.5)
     assert dem.repair.voids_filled == 0 and dem.repair.spikes_repaired == 0
 
-
-def test_esri_ascii_grid_takes_the_crs_given():
     dem = load_dem(data_path("dem", "tirol_stubai_10m.asc"), crs="EPSG:31254")
-    assert dem.crs == "EPSG:31254"
-    assert dem.shape == (360, 324)
-    assert dem.cell_size == (10.0, 10.0)
-    assert dem.elevation.min() == pytest.approx(1349, abs=1)
-    assert dem.elevation.max() == pytest.approx(2716, abs=1)
+    assert dem.crs == "EPSG:31254" and dem.shape == (360, 324) and dem.cell_size == (10.0, 10.0)
+    assert dem.elevation.min() == pytest.approx(1349, abs=1) and dem.elevation.max() == pytest.approx(2716, abs=1)
     lon, lat = dem.to_lonlat(*dem.centre)
     assert 11.0 < lon < 11.5 and 46.9 < lat < 47.3  # Stubai Alps
 
-
-def test_esri_ascii_grid_without_crs_uses_a_local_frame():
-    dem = load_dem(data_path("dem", "tirol_stubai_10m.asc"))
-    assert dem.crs is None
-    with pytest.raises(InputError):
-        dem.to_lonlat(*dem.centre)
-
-
-def test_hgt_is_reprojected_to_the_utm_zone_of_its_centre():
     dem = load_dem(data_path("dem", "N43E006.hgt"))
     assert dem.crs == "EPSG:32632"  # centre 6.5 E lies in zone 32 (6-12 E)
     dx, dy = dem.cell_size
@@ -54,17 +39,76 @@ def test_hgt_is_reprojected_to_the_utm_zone_of_its_centre():
     lon, lat = dem.to_lonlat(*dem.centre)
     assert lon == pytest.approx(6.5, abs=0.01) and lat == pytest.approx(43.5, abs=0.01)
 
-
-def test_hgt_voids_are_filled_and_counted():
     dem = load_dem(data_path("dem", "N47E011.hgt"))
     assert dem.repair.voids_filled == 54278
     assert np.isfinite(dem.elevation).all()
     assert 470 < dem.elevation.min() and dem.elevation.max() < 3462
 
+    assert load_dem(data_path("dem", "S44E170.hgt")).crs == "EPSG:32759"
 
-def test_southern_hemisphere_tile_uses_a_327zz_zone():
-    dem = load_dem(data_path("dem", "S44E170.hgt"))
-    assert dem.crs == "EPSG:32759"
+    dem = load_dem(data_path("dem", "N27E086.hgt"))
+    assert dem.elevation.max() > 8750  # Everest survives (bilinear shaves a few metres)
+    assert dem.repair.spikes_repaired <= 2  # two deep gorge cells at most, no summit
+
+
+def _write_hgt(path, void_rows=0):
+    """A synthetic SRTM3 tile: a tilted plane (m) with ``void_rows`` rows of -32768 voids."""
+    z = (500 + np.add.outer(np.arange(1201), np.arange(1201)) * 0.5).astype(">i2")
+    z[600:600 + void_rows, 300:700] = -32768
+    z.tofile(path)
+
+
+def test_hgt_is_reprojected_to_the_utm_zone_of_its_centre_south_of_the_equator_too(tmp_path):
+    _write_hgt(tmp_path / "N43E006.hgt")
+    _write_hgt(tmp_path / "S44E170.hgt")
+    north = load_dem(tmp_path / "N43E006.hgt")
+    assert north.crs == "EPSG:32632"  # centre 6.5 E lies in zone 32 (6-12 E)
+    dx, dy = north.cell_size
+    assert dx == dy and 60 < dx < 95
+    lon, lat = north.to_lonlat(*north.centre)
+    assert lon == pytest.approx(6.5, abs=0.01) and lat == pytest.approx(43.5, abs=0.01)
+    assert load_dem(tmp_path / "S44E170.hgt").crs == "EPSG:32759"  # south: 327zz
+
+
+def test_hgt_voids_are_filled_and_counted(tmp_path):
+    _write_hgt(tmp_path / "N47E011.hgt", void_rows=3)
+    dem = load_dem(tmp_path / "N47E011.hgt")
+    assert dem.repair.voids_filled == 3 * 400
+    assert np.isfinite(dem.elevation).all()
+    assert 490 < dem.elevation.min() and dem.elevation.max() < 500 + 1200 + 10
+
+
+def _write_asc(path, z, cell=10.0):
+    rows, cols = z.shape
+    head = f"ncols {cols}\nnrows {rows}\nxllcorner 80000\nyllcorner 210000\ncellsize {cell}\nNODATA_value -9999\n"
+    path.write_text(head + "\n".join(" ".join(f"{v:.1f}" for v in row) for row in z))
+
+
+def test_esri_ascii_grid_takes_the_crs_given_or_uses_a_local_frame(tmp_path):
+    z = 1400 + np.add.outer(np.arange(36.0), np.arange(32.0)) * 10
+    _write_asc(tmp_path / "g.asc", z)
+    dem = load_dem(tmp_path / "g.asc", crs="EPSG:31254")
+    assert dem.crs == "EPSG:31254" and dem.shape == (36, 32) and dem.cell_size == (10.0, 10.0)
+    assert dem.elevation.min() == pytest.approx(1400) and dem.elevation.max() == pytest.approx(1400 + 660)
+    lon, lat = dem.to_lonlat(*dem.centre)
+    assert 10.0 < lon < 12.5 and 46.0 < lat < 48.5  # MGI / Austria GK West
+    local = load_dem(tmp_path / "g.asc")
+    assert local.crs is None
+    with pytest.raises(InputError):
+        local.to_lonlat(*local.centre)
+
+
+def test_geotiff_utm_loads_with_its_crs_size_and_range(tmp_path):
+    import rasterio
+
+    z = (315 + np.add.outer(np.arange(64), np.arange(120)) * 10).astype(np.float32)
+    with rasterio.open(tmp_path / "u.tif", "w", driver="GTiff", height=64, width=120, count=1, dtype="float32",
+                       crs="EPSG:32611", transform=Affine(30.0, 0, 380000.0, 0, -30.0, 3800000.0)) as ds:
+        ds.write(z, 1)
+    dem = load_dem(tmp_path / "u.tif")
+    assert dem.crs == "EPSG:32611" and dem.shape == (64, 120) and dem.cell_size == (30.0, 30.0)
+    assert dem.elevation.min() == pytest.approx(315) and dem.elevation.max() == pytest.approx(315 + 1820)
+    assert dem.repair.voids_filled == 0 and dem.repair.spikes_repaired == 0
 
 
 def test_builtin_jacksboro_is_north_up_in_utm_16n():
@@ -110,12 +154,6 @@ def test_a_32767_spike_is_repaired_and_reported(tmp_path):
     assert dem.repair.spikes_repaired == 2
     assert dem.elevation.max() < 600
     assert dem.elevation[20, 21] == pytest.approx(500 + 20 + 21, abs=2)
-
-
-def test_real_summits_are_not_taken_for_spikes():
-    dem = load_dem(data_path("dem", "N27E086.hgt"))
-    assert dem.elevation.max() > 8750  # Everest survives (bilinear shaves a few metres)
-    assert dem.repair.spikes_repaired <= 2  # two deep gorge cells at most, no summit
 
 
 @pytest.mark.parametrize("content", [b"hello, I am not a DEM\n", b""])
