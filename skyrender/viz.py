@@ -63,6 +63,33 @@ def peaks_in_view(model, pose, intrinsics, skyline=None, curvature: bool = True,
     return rows, uv[rows], dist
 
 
+def place_labels(anchors: list[tuple[int, int]], sizes: list[tuple[int, int]], shape: tuple[int, int],
+                 gap: int = 3, tries: int = 6) -> list[tuple[int, int] | None]:
+    """Text origins (x, y: the baseline's left end, px) for labels of the given sizes
+    (w, h) near their anchors (u, v), in priority order, so that no two labels overlap
+    and each lies within the image (H, W): first above-right of the anchor, then stacked
+    further up, then to the left; None where no place is free (the label is dropped)."""
+    H, W = shape
+    taken: list[tuple[int, int, int, int]] = []
+    out: list[tuple[int, int] | None] = []
+    for (u, v), (w, h) in zip(anchors, sizes):
+        spot = None
+        for k in range(tries):
+            for x in (u + 4, u - 4 - w):
+                y = v - 8 - k * (h + gap)
+                box = (x, y - h, x + w, y + gap)
+                if box[0] < 0 or box[2] > W or box[1] < 0 or box[3] > H:
+                    continue
+                if all(box[2] <= t[0] or box[0] >= t[2] or box[3] <= t[1] or box[1] >= t[3] for t in taken):
+                    spot = (x, y)
+                    taken.append(box)
+                    break
+            if spot is not None:
+                break
+        out.append(spot)
+    return out
+
+
 def localization_overlay(image: np.ndarray, result, model, max_labels: int = 12) -> np.ndarray:
     """The photo with the photo's skyline (red), the skyline rendered from the found
     pose (green) and the model peaks in view, labelled "id elevation distance"."""
@@ -76,10 +103,16 @@ def localization_overlay(image: np.ndarray, result, model, max_labels: int = 12)
         return out
     rows, uv, dist = peaks_in_view(model, result.pose, result.intrinsics, result.rendered_skyline)
     f = model.features
-    order = np.argsort(-f.z[rows])[:max_labels]  # highest first
-    for i in order:
-        u, v = (int(round(c)) for c in uv[i])
+    order = np.argsort(-f.z[rows])[:max_labels]  # highest first: a lesser peak yields its place
+    labels = [f"P{int(f.id[rows[i]])} {f.z[rows[i]]:.0f}m {dist[i] / 1000:.1f}km" for i in order]
+    sizes = [cv2.getTextSize(t, cv2.FONT_HERSHEY_SIMPLEX, 0.4, 1)[0] for t in labels]
+    anchors = [tuple(int(round(c)) for c in uv[i]) for i in order]
+    for (u, v), label, spot in zip(anchors, labels, place_labels(anchors, sizes, out.shape[:2])):
         cv2.drawMarker(out, (u, v), (255, 255, 0), cv2.MARKER_TRIANGLE_UP, 10, 2)
-        label = f"P{int(f.id[rows[i]])} {f.z[rows[i]]:.0f}m {dist[i] / 1000:.1f}km"
-        cv2.putText(out, label, (u + 4, max(12, v - 8)), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 0), 1, cv2.LINE_AA)
+        if spot is None:
+            continue
+        x, y = spot
+        if abs(y - (v - 8)) > 1 or abs(x - (u + 4)) > 1:  # moved off its peak: a leader line back to it
+            cv2.line(out, (u, v - 6), (x, y + 2), (255, 255, 0), 1, cv2.LINE_AA)
+        cv2.putText(out, label, (x, y), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 0), 1, cv2.LINE_AA)
     return out

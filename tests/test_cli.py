@@ -168,3 +168,20 @@ def test_a_short_fuzz_run_of_malformed_inputs_has_no_failures():
     report = fuzz(n=80, seed=7, limit_s=60.0, progress=False)
     assert report["cases"] == 80
     assert report["failures"] == []
+
+
+def test_overlay_labels_of_nearby_peaks_do_not_overlap():
+    from skyrender.viz import place_labels
+
+    # five peaks a few pixels apart, labels 90 x 10 px: none may overlap, all inside the image
+    anchors = [(100 + 6 * i, 80 + (i % 2) * 3) for i in range(5)]
+    spots = place_labels(anchors, [(90, 10)] * 5, (120, 320))
+    boxes = [(x, y - 10, x + 90, y + 3) for x, y in (s for s in spots if s is not None)]
+    assert len(boxes) >= 4
+    for i, a in enumerate(boxes):
+        assert 0 <= a[0] and a[2] <= 320 and 0 <= a[1] and a[3] <= 120
+        for b in boxes[i + 1:]:
+            assert a[2] <= b[0] or a[0] >= b[2] or a[3] <= b[1] or a[1] >= b[3]
+    assert spots[0] == (104, 72)  # the first (highest) keeps its place beside its peak
+    # no room at all: the label is dropped, not drawn over another
+    assert place_labels([(5, 5), (6, 6)], [(300, 10)] * 2, (20, 40)) == [None, None]

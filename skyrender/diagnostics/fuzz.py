@@ -105,6 +105,22 @@ def _mutate_bytes(data: bytes, rng: np.random.Generator) -> bytes:
     return bytes(buf[:at]) + rng.bytes(int(rng.integers(1, 64))) + bytes(buf[at:])
 
 
+def _with_mutants(files: list[str], valid: list[str], work: str, rng: np.random.Generator, n: int) -> list[str]:
+    """``files`` topped up to ``n`` with byte mutations of the ``valid`` ones, in turn."""
+    files = list(files)
+    i = 0
+    while len(files) < n:
+        src = valid[i % len(valid)]
+        with open(src, "rb") as f:
+            data = f.read()
+        path = os.path.join(work, f"mut{i}_{os.path.basename(src)}")
+        with open(path, "wb") as f:
+            f.write(_mutate_bytes(data, rng))
+        files.append(path)
+        i += 1
+    return files[:n]
+
+
 def _dem_files(work: str, rng: np.random.Generator, n: int) -> list[str]:
     """n DEM files: each grid in each format, then byte mutations of the valid ones."""
     files, valid = [], []
@@ -128,17 +144,7 @@ def _dem_files(work: str, rng: np.random.Generator, n: int) -> list[str]:
     tile.tofile(hgt)
     valid.append(hgt)
     files.append(hgt)
-    i = 0
-    while len(files) < n:
-        src = valid[i % len(valid)]
-        with open(src, "rb") as f:
-            data = f.read()
-        path = os.path.join(work, f"mut{i}_{os.path.basename(src)}")
-        with open(path, "wb") as f:
-            f.write(_mutate_bytes(data, rng))
-        files.append(path)
-        i += 1
-    return files[:n]
+    return _with_mutants(files, valid, work, rng, n)
 
 
 def _image_files(work: str, rng: np.random.Generator, n: int) -> list[str]:
@@ -171,17 +177,7 @@ def _image_files(work: str, rng: np.random.Generator, n: int) -> list[str]:
         path = os.path.join(work, f"photo{ext}")
         cv2.imwrite(path, photo(96, 128))
         valid.append(path)
-    i = 0
-    while len(files) < n:
-        src = valid[i % len(valid)]
-        with open(src, "rb") as f:
-            data = f.read()
-        path = os.path.join(work, f"mut{i}_{os.path.basename(src)}")
-        with open(path, "wb") as f:
-            f.write(_mutate_bytes(data, rng))
-        files.append(path)
-        i += 1
-    return files[:n]
+    return _with_mutants(files, valid, work, rng, n)
 
 
 def _model_dirs(work: str, rng: np.random.Generator, valid_model: str, n: int) -> list[str]:
