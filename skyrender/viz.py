@@ -107,12 +107,14 @@ def localization_overlay(image: np.ndarray, result, model, max_labels: int = 12)
     labels = [f"P{int(f.id[rows[i]])} {f.z[rows[i]]:.0f}m {dist[i] / 1000:.1f}km" for i in order]
     sizes = [cv2.getTextSize(t, cv2.FONT_HERSHEY_SIMPLEX, 0.4, 1)[0] for t in labels]
     anchors = [tuple(int(round(c)) for c in uv[i]) for i in order]
-    for (u, v), label, spot in zip(anchors, labels, place_labels(anchors, sizes, out.shape[:2])):
+    spots = place_labels(anchors, sizes, out.shape[:2])
+    for (u, v), (w, _), spot in zip(anchors, sizes, spots):  # markers and leader lines first, text on top
         cv2.drawMarker(out, (u, v), (255, 255, 0), cv2.MARKER_TRIANGLE_UP, 10, 2)
-        if spot is None:
-            continue
-        x, y = spot
-        if abs(y - (v - 8)) > 1 or abs(x - (u + 4)) > 1:  # moved off its peak: a leader line back to it
-            cv2.line(out, (u, v - 6), (x, y + 2), (255, 255, 0), 1, cv2.LINE_AA)
-        cv2.putText(out, label, (x, y), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 0), 1, cv2.LINE_AA)
+        if spot is not None and (abs(spot[1] - (v - 8)) > 1 or abs(spot[0] - (u + 4)) > 1):  # moved off its peak
+            x, y = spot
+            cv2.line(out, (u, v - 6), (min(max(u, x), x + w), y + 2), (255, 255, 0), 1, cv2.LINE_AA)
+    for label, spot in zip(labels, spots):
+        if spot is not None:
+            cv2.putText(out, label, spot, cv2.FONT_HERSHEY_SIMPLEX, 0.4, (40, 40, 40), 3, cv2.LINE_AA)  # outline
+            cv2.putText(out, label, spot, cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 0), 1, cv2.LINE_AA)
     return out
