@@ -11,6 +11,11 @@ and the level assumption's error are absorbed by fitting, per (centre,
 azimuth), elevation offset + a alpha + b alpha^2 (alpha the relative azimuth, rad)
 by weighted least squares: the cost is the mean squared residual (deg^2).
 
+For real photographs (``LocalizeParams.for_photos``) the skyline is turned into
+directions for several tilts (a camera looking up 20-30 deg at a ridge maps its columns
+to azimuths quite unlike a level one) and only offset + slope are fitted: the curvature
+term let wrong horizons fit as well as the right one.
+
 A near ridge in the photo does not appear in a far horizon, so besides the whole
 skyline, windows of it (its left or right part) are matched too, and each
 window's best (centre, azimuth) pairs become poses for verification.
