@@ -22,9 +22,10 @@ from scipy.optimize import least_squares
 
 from ..camera import Intrinsics, curvature_coeff, project
 from ..render import Terrain, render_skylines
+from ..render.skyline import strided_skylines
 from ..render.visibility import line_of_sight
 from .pose_solver import camera_centres, image_bearings, poses_at, position_uncertainty
-from .verification import SHIFTS_PX, ScoreParams, align_skylines, column_errors, score_skylines, strided_skylines
+from .verification import SHIFTS_PX, ScoreParams, align_skylines, column_errors, score_skylines
 
 #: Forward-difference steps: metres for x, y; degrees for the angles; relative for f.
 STEP_XY_M = 2.0

@@ -26,7 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..camera import Intrinsics
-from ..render import Terrain, render_skylines
+from ..render import Terrain
+from ..render.skyline import strided_skylines
 
 #: Horizontal shifts (px) tried when aligning a rendered skyline to the photo's.
 SHIFTS_PX = np.arange(-30.0, 30.01, 1.0)
@@ -152,33 +153,6 @@ def _aligned_at(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx
     score, agreement = score_skylines(moved + b[:, None] + c[:, None] * x, image, weights, params, trusted)
     return score, agreement, np.broadcast_to(np.asarray(a, np.float64), score.shape), b.astype(np.float64), \
         c.astype(np.float64)
-
-
-def strided_intrinsics(intrinsics: Intrinsics, stride: int) -> tuple[Intrinsics, np.ndarray]:
-    """Intrinsics of a ``stride`` times smaller image whose column k samples the full
-    image's column ``stride*k + stride//2`` exactly; returns them and those columns.
-    Its v coordinates scale back by ``v_full = cy + stride * (v - cy_small)``."""
-    W, H = intrinsics.width, intrinsics.height
-    cols = np.arange(stride // 2, W, stride)
-    f = intrinsics.f_px / stride
-    # column k's centre k + 0.5 must look along full column centre cols[0] + 0.5 + stride * k
-    cx = 0.5 - (cols[0] + 0.5 - intrinsics.cx) / stride
-    small = Intrinsics(len(cols), max(2, int(np.ceil(H / stride))), f, cx, intrinsics.cy / stride)
-    return small, cols
-
-
-def strided_skylines(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, stride: int,
-                     tol_px: float, with_distance: bool = False):
-    """Skylines (P, n) of poses (P, 6) on every ``stride``-th column
-    (:func:`strided_intrinsics`), in full-image v (px) to within ``tol_px`` full-image
-    px, and those columns (n,): a render ``stride`` times cheaper. With
-    ``with_distance``, (skylines, distances in m, columns)."""
-    small, cols = strided_intrinsics(intrinsics, stride)
-    rendered = render_skylines(terrain, poses, small, tol=tol_px / stride, with_distance=with_distance)
-    if with_distance:
-        rendered, distance = rendered
-        return intrinsics.cy + stride * (rendered - small.cy), distance, cols
-    return intrinsics.cy + stride * (rendered - small.cy), cols
 
 
 def verify_poses(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, image_skyline: np.ndarray,

@@ -221,3 +221,30 @@ def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
             hit = hits(mid + 0.5)
             lo, hi = np.where(hit | ~active, lo, mid), np.where(hit & active, mid, hi)
         return with_distance_of(np.where(hi >= H, np.nan, hi), hi + 0.5)
+
+
+def strided_intrinsics(intrinsics: Intrinsics, stride: int) -> tuple[Intrinsics, np.ndarray]:
+    """Intrinsics of a ``stride`` times smaller image whose column k samples the full
+    image's column ``stride*k + stride//2`` exactly; returns them and those columns.
+    Its v coordinates scale back by ``v_full = cy + stride * (v - cy_small)``."""
+    W, H = intrinsics.width, intrinsics.height
+    cols = np.arange(stride // 2, W, stride)
+    f = intrinsics.f_px / stride
+    # column k's centre k + 0.5 must look along full column centre cols[0] + 0.5 + stride * k
+    cx = 0.5 - (cols[0] + 0.5 - intrinsics.cx) / stride
+    small = Intrinsics(len(cols), max(2, int(np.ceil(H / stride))), f, cx, intrinsics.cy / stride)
+    return small, cols
+
+
+def strided_skylines(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, stride: int,
+                     tol_px: float, with_distance: bool = False):
+    """Skylines (P, n) of poses (P, 6) on every ``stride``-th column
+    (:func:`strided_intrinsics`), in full-image v (px) to within ``tol_px`` full-image
+    px, and those columns (n,): a render ``stride`` times cheaper. With
+    ``with_distance``, (skylines, distances in m, columns)."""
+    small, cols = strided_intrinsics(intrinsics, stride)
+    rendered = render_skylines(terrain, poses, small, tol=tol_px / stride, with_distance=with_distance)
+    if with_distance:
+        rendered, distance = rendered
+        return intrinsics.cy + stride * (rendered - small.cy), distance, cols
+    return intrinsics.cy + stride * (rendered - small.cy), cols
