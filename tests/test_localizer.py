@@ -282,11 +282,10 @@ def test_refinement_gives_up_after_the_sweep_on_a_wrong_triple(scene, views):
 
 
 # --- end to end on rendered photographs --------------------------------------------------
-# Thresholds: the views look at peaks 10-15 km away from 2 m above the ground, where
-# 50 m of camera position moves the re-oriented skyline by less than 0.1 px (see the
-# refinement test), so a localization is right within 60 m and 0.25 deg; the figures
-# the method reaches on a larger set are in the README (make bench-localize).
-POS_TOL_M, ANG_TOL_DEG = 60.0, 0.25
+# Thresholds: what the code reaches on these views with a margin (2026-12-01: 0.2-22 m and
+# 0.04-0.12 deg over the eight end-to-end localizations); the figures on a larger set are
+# in the README (make bench-localize).
+POS_TOL_M, ANG_TOL_DEG = 35.0, 0.2
 
 
 def _photo(terrain, pose, intr=K, **look):
