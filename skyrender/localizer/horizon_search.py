@@ -123,7 +123,7 @@ def horizon_poses(horizons: Horizons, skyline: np.ndarray, weights: np.ndarray, 
     if len(horizons) == 0:
         return np.zeros((0, 6)), np.zeros(0)
     spectra = horizons.spectra
-    picked: dict[tuple[int, int], tuple[float, float]] = {}  # (centre, azimuth bin) -> (cost, tilt)
+    flats, costs, tilts = [], [], []  # every window's best (centre, azimuth) pairs, in the order found
     for tilt in params.tilts:
         bins, elevation, w = skyline_directions(skyline, weights, intrinsics, horizons.bin_deg, tilt)
         if len(bins) < params.min_bins:
@@ -138,15 +138,21 @@ def horizon_poses(horizons: Horizons, skyline: np.ndarray, weights: np.ndarray, 
             k = min(params.per_window, cost.size)
             best = np.argpartition(cost, k - 1)[:k]
             best = best[np.argsort(cost[best])]
-            for flat, offset in zip(best, offset_at(best)):
-                key = divmod(int(flat), n_bins)
-                if key not in picked or cost[flat] < picked[key][0]:
-                    picked[key] = (float(cost[flat]), tilt + float(offset))
-    if not picked:
+            flats.append(best)
+            costs.append(cost[best])
+            tilts.append(tilt + offset_at(best).astype(np.float64))
+    if not flats:
         return np.zeros((0, 6)), np.zeros(0)
-    keys = np.array(list(picked.keys()), np.int64)
-    vals = np.array(list(picked.values()))
-    centres = camera_centres(dem, horizons.centres[keys[:, 0], :2], height)
-    poses = np.column_stack([centres, keys[:, 1] * horizons.bin_deg, vals[:, 1], np.zeros(len(keys))])
-    order = np.argsort(vals[:, 0], kind="stable")
-    return poses[order], vals[order, 0]
+    flat, cost, tilt = np.concatenate(flats), np.concatenate(costs).astype(np.float64), np.concatenate(tilts)
+    # one pose per (centre, azimuth): its lowest cost (the first found among equals), listed by cost, then by
+    # where the pair was first found
+    found = np.arange(len(flat))
+    by_cost = np.lexsort((found, cost))
+    keys, best_of_key = np.unique(flat[by_cost], return_index=True)
+    pick = by_cost[best_of_key]
+    _, first_seen = np.unique(flat, return_index=True)  # aligned with keys (both sorted by key)
+    pick = pick[np.lexsort((first_seen, cost[pick]))]
+    centre, azimuth = np.divmod(flat[pick], n_bins)
+    centres = camera_centres(dem, horizons.centres[centre, :2], height)
+    poses = np.column_stack([centres, azimuth * horizons.bin_deg, tilt[pick], np.zeros(len(pick))])
+    return poses, cost[pick]
