@@ -135,21 +135,26 @@ def skyline(
     overlay: Optional[Path] = typer.Option(None, "--overlay", help="write the photo with the skyline drawn"),
     peaks: int = typer.Option(6, "--peaks", help="skyline peaks to report (with --json)"),
     json_out: bool = typer.Option(False, "--json", help="print {width, height, skyline} as one JSON object"),
-    method: str = typer.Option("gmm", "--method", help="gmm (per-photo colour mixtures, default) or net (learned)"),
+    method: str = typer.Option("auto", "--method", help="hybrid (learned + per-photo colour mixtures), net (learned), "
+                               "gmm (per-photo colour mixtures) or auto: hybrid for camera photos (JPEG or "
+                               "camera EXIF), gmm for others (renders)"),
 ):
     """Extract the skyline (sky/terrain boundary per column) from a photograph."""
     from .features import SkylineParams, extract_skyline, load_photo, skyline_peaks
+    from .features.photo_io import is_camera_photo
     from .io import save_skyline, skyline_to_list
     from .viz import draw_skyline, write_image
 
     if peaks < 0:
         raise InputError(f"--peaks must be >= 0, got {peaks}")
-    if method not in ("net", "gmm"):
-        raise InputError(f"--method must be net or gmm, got {method!r}")
+    if method not in ("auto", "hybrid", "net", "gmm"):
+        raise InputError(f"--method must be auto, hybrid, net or gmm, got {method!r}")
     for path, option, kinds in ((out, "--out", SKYLINE_SUFFIXES), (overlay, "--overlay", IMAGE_SUFFIXES)):
         if path is not None:
             _check_writable(path, option, kinds)
     photo = load_photo(image)
+    if method == "auto":
+        method = "hybrid" if is_camera_photo(str(image)) else "gmm"
     result = extract_skyline(photo, SkylineParams(method=method))
     if out is not None:
         save_skyline(out, result.skyline)
@@ -412,6 +417,44 @@ def _click_classes(name: str) -> tuple[type, ...]:
 @app.callback()
 def _root() -> None:
     """Camera pose from one mountain photograph and a DEM."""
+
+
+@app.command()
+def dataset(
+    scene: Path = typer.Argument(..., help="scene file (scenes/*.toml) with a [dataset] table, or any scene"),
+    n: int = typer.Option(..., "--n", help="views to render"),
+    out: Path = typer.Option(..., "--out", help="dataset folder (views already there are kept: resuming)"),
+    seed: int = typer.Option(0, "--seed", help="seed: the same seed gives the same files"),
+    workers: int = typer.Option(0, "--workers", help="render on a local Dask cluster of this many processes"),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="render on this Dask scheduler (tcp://host:port)"),
+    quiet: bool = typer.Option(False, "--quiet", help="no progress bar"),
+):
+    """Write a frozen synthetic dataset: photos, poses, true skylines, sky masks, a manifest."""
+    from .datasets.synthetic import write_dataset
+
+    if not 0 <= seed < 2**32 or workers < 0:
+        raise InputError("--seed must lie in [0, 2^32) and --workers be >= 0")
+    info = write_dataset(str(scene), n, str(out), seed, progress=not quiet, workers=workers, scheduler=scheduler)
+    typer.echo(f"wrote {info['views']} views of {info['dem']} to {out} (seed {seed})")
+
+
+@app.command()
+def experiment(
+    config: Path = typer.Argument(..., help="experiment config (experiments/NAME.toml)"),
+    out: Optional[Path] = typer.Option(None, "--out", help="results folder (default: NAME/results beside the config)"),
+    workers: Optional[int] = typer.Option(None, "--workers", help="run on a local Dask cluster of this many processes"),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="run on this Dask scheduler (tcp://host:port)"),
+    quiet: bool = typer.Option(False, "--quiet", help="no progress bars"),
+):
+    """Localize every view of the datasets with every configuration; write results, tables and plots."""
+    from .experiment import load_experiment, run_experiment
+
+    if workers is not None and workers < 0:
+        raise InputError(f"--workers must be >= 0, got {workers}")
+    exp = load_experiment(str(config), None if out is None else str(out))
+    result = run_experiment(exp, workers=workers, scheduler=scheduler, progress=not quiet)
+    typer.echo(result["tables"])
+    typer.echo(f"results in {exp.out}")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -10,6 +10,12 @@ Format::
     height = 2.0                   # camera height above ground (m)
     pan = ... ; tilt = ... ; swing = ...   # degrees
     fov = 60.0 ; width = 640 ; height_px = 480
+    [dataset.sampling]             # optional: how ``skyrender dataset`` draws views
+    fov_deg = [25.0, 75.0]         # (fields of :class:`skyrender.datasets.synthetic.Sampling`)
+    [dataset.realism]              # (fields of :class:`skyrender.datasets.synthetic.Realism`)
+    skies = ["clear", "hazy"]
+
+A scene needs ``[[views]]``, a ``[dataset]`` table, or both.
 """
 
 from __future__ import annotations
@@ -36,6 +42,8 @@ class View:
 class Scene:
     dem: DEM
     views: tuple[View, ...]
+    dem_ref: str = ""  # the scene file's ``dem`` as written
+    dataset: dict | None = None  # the ``[dataset]`` table, if any
 
 
 def load_scene(path) -> Scene:
@@ -64,6 +72,9 @@ def load_scene(path) -> Scene:
         except KeyError as exc:
             raise InputError(f"{path}: view {i} lacks {exc.args[0]!r}") from None
         views.append(View(str(v.get("name", f"view{i}")), pose, intr, float(v["height"])))
-    if not views:
-        raise InputError(f"{path}: no [[views]] defined")
-    return Scene(dem, tuple(views))
+    dataset = spec.get("dataset")
+    if dataset is not None and not isinstance(dataset, dict):
+        raise InputError(f"{path}: 'dataset' must be a table")
+    if not views and dataset is None:
+        raise InputError(f"{path}: no [[views]] and no [dataset] defined")
+    return Scene(dem, tuple(views), str(spec["dem"]), dataset)

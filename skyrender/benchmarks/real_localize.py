@@ -26,7 +26,7 @@ import numpy as np
 
 from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
 from ..diagnostics.oracle import DEM_DIR, tiles_around
-from .skyline_photos import git_commit
+from ..evaluate import git_commit
 
 HALF_LAT, HALF_LON = 0.6, 0.7  # degrees either side of the place's centre
 RECALL_M = (100.0, 250.0, 1000.0)

@@ -175,6 +175,21 @@ class DEM:
             )
         return Pose(x, y, float(self.ground(x, y)) + height, pan, tilt, swing).normalized()
 
+    def coarsened(self, factor: int) -> "DEM":
+        """The DEM averaged over ``factor`` x ``factor`` blocks of cells (a coarser source of
+        the same terrain, e.g. 30 m -> 90 m for ``factor`` 3); rows and columns that do not
+        fill a block are dropped. ``factor`` 1 returns the DEM itself."""
+        factor = int(factor)
+        if factor < 1:
+            raise InputError(f"block factor must be >= 1, got {factor}")
+        if factor == 1:
+            return self
+        rows, cols = (n // factor for n in self.shape)
+        if min(rows, cols) < 2:
+            raise InputError(f"{self.name or 'DEM'}: too small for {factor} x {factor} blocks")
+        z = self.elevation[: rows * factor, : cols * factor].reshape(rows, factor, cols, factor).mean(axis=(1, 3))
+        return DEM(z, self.transform * Affine.scale(factor), self.crs, f"{self.name} ({factor}x{factor} block mean)")
+
     def fingerprint(self) -> str:
         """Stable hash of elevations, grid and CRS (to refuse mismatched models)."""
         h = hashlib.sha256()

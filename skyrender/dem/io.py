@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import os
+from dataclasses import replace
 
 import numpy as np
 from affine import Affine
@@ -20,7 +21,9 @@ from ..errors import InputError
 from .grid import DEM, RepairReport
 from .repair import repair_elevation
 
-BUILTIN_DEMS = ("builtin:jacksboro",)
+#: builtin:jacksboro is matplotlib's real DEM; builtin:naval2000 the paper-like synthetic
+#: scene (600 x 600 cells of 50 m, two dominant mountains; :func:`.synthetic.fractal_terrain`).
+BUILTIN_DEMS = ("builtin:jacksboro", "builtin:naval2000")
 EARTH_METRES_PER_DEGREE = 111_320.0
 
 
@@ -53,7 +56,8 @@ def load_dem(path: str | os.PathLike | list | tuple | None = None, *, crs=None, 
 
     Parameters
     ----------
-    path : file path, or ``builtin:jacksboro`` / None for the built-in real DEM. Several
+    path : file path, or ``builtin:jacksboro`` / None for the built-in real DEM
+        (``builtin:naval2000``: the paper-like synthetic scene). Several
         tiles are mosaicked into one DEM: give a list of paths, paths joined by commas,
         a directory (every ``.hgt``/``.tif`` in it) or a GDAL VRT.
     crs : CRS of the file when it has none (e.g. ``EPSG:31254`` for an ESRI grid),
@@ -64,6 +68,10 @@ def load_dem(path: str | os.PathLike | list | tuple | None = None, *, crs=None, 
     bounds : (west, south, east, north) in the raster files' CRS (degrees for SRTM):
         read only that window of the tiles (a search area inside a large mosaic).
     """
+    if str(path) == "builtin:naval2000":
+        from .synthetic import fractal_terrain
+
+        return replace(fractal_terrain(), name="builtin:naval2000")
     if path is None or str(path) in BUILTIN_DEMS:
         return _load_jacksboro(resolution)
     tiles = dem_tiles(path)

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..camera import Intrinsics
+from ..config import params_from_dict, params_to_dict
 from ..errors import InputError
 from ..features import ExtractedSkyline, extract_skyline, load_photo, skyline_peaks
 from ..features.skyline import SkylineParams
@@ -69,7 +70,7 @@ PHOTO_MIN_CONFIDENCE = 0.8
 
 @dataclass(frozen=True)
 class LocalizeParams:
-    skyline_method: str = "gmm"  # the skyline extractor when none is given: "gmm" (renders) or "net" (photos)
+    skyline_method: str = "gmm"  # the skyline extractor when none is given: "gmm" (renders) or "hybrid" (photos)
     n_peaks: int = 8  # image peaks taken (the paper's top N)
     max_peak_aspect: float = 1.5  # steeper skyline peaks are trees or posts in front, not mountains
     peak_smooth_px: float = 3.0  # skyline smoothing before peak finding (2 px let sub-pixel changes reorder the peaks)
@@ -112,10 +113,31 @@ class LocalizeParams:
         wrong poses overlap (1.1-2.4 vs 1.1-4.0 px on CH1 training photos), but the
         margin to the best pose over 1 km away separates them, so the confidence is a
         logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`)."""
-        return cls(skyline_method="net", max_hypotheses=0, final_refinements=8, max_refinements=4, max_horizon_refinements=16,
+        return cls(skyline_method="hybrid", max_hypotheses=0, final_refinements=8, max_refinements=4, max_horizon_refinements=16,
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=1000.0, confidence_model="margin",
                    margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,
                    horizon=HorizonSearchParams(tilts=(-10.0, 0.0, 10.0, 20.0, 30.0), terms=2, rank_by_cost=True))
+
+    @classmethod
+    def preset(cls, name: str) -> "LocalizeParams":
+        """The named parameter set: ``render`` (the defaults) or ``photo`` (:meth:`for_photos`)."""
+        if name not in PRESETS:
+            raise InputError(f"unknown preset {name!r} (one of {', '.join(PRESETS)})")
+        return PRESETS[name]()
+
+    def to_dict(self) -> dict:
+        """Every field as plain values (nested groups as dicts), e.g. for JSON results."""
+        return params_to_dict(self)
+
+    @classmethod
+    def from_dict(cls, data: dict, base: "LocalizeParams | None" = None) -> "LocalizeParams":
+        """``base`` (default: the defaults) with the fields in ``data`` set; InputError names
+        an unknown field or a value of the wrong kind."""
+        return params_from_dict(cls, data, base)
+
+
+#: Named parameter sets (``--preset``, experiment configs).
+PRESETS = {"render": LocalizeParams, "photo": LocalizeParams.for_photos}
 
 
 @dataclass

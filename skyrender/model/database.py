@@ -16,11 +16,12 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import numpy as np
 from affine import Affine
 
+from ..config import params_from_dict, params_to_dict
 from ..dem import DEM
 from ..errors import InputError
 from .covisibility import Covisibility, CovisibilityParams
@@ -39,8 +40,7 @@ class ModelParams:
     horizons: HorizonParams = field(default_factory=HorizonParams)
 
     def to_dict(self) -> dict:
-        return {"peaks": asdict(self.peaks), "k": self.k, "covisibility": asdict(self.covisibility),
-                "horizons": asdict(self.horizons)}
+        return params_to_dict(self)
 
     @classmethod
     def for_photos(cls) -> "ModelParams":
@@ -52,9 +52,8 @@ class ModelParams:
         return cls(horizons=HorizonParams(spacing=500.0, near_m=300.0, max_centres=60_000))
 
     @classmethod
-    def from_dict(cls, d: dict) -> "ModelParams":
-        return cls(PeakParams(**d["peaks"]), int(d["k"]), CovisibilityParams(**d["covisibility"]),
-                   HorizonParams(**d["horizons"]))
+    def from_dict(cls, d: dict, base: "ModelParams | None" = None) -> "ModelParams":
+        return params_from_dict(cls, d, base)
 
 
 @dataclass(frozen=True, eq=False)

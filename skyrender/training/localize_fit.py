@@ -23,8 +23,8 @@ import numpy as np
 from scipy.optimize import minimize
 
 from ..benchmarks.real_localize import run
-from ..benchmarks.skyline_photos import git_commit
 from ..datasets.real_photos import DEFAULT_PHOTOS, items_on_side
+from ..evaluate import git_commit
 from ..localizer import LocalizeParams
 from ..localizer.pipeline import PHOTO_CONFIDENCE_FILE
 
