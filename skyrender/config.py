@@ -42,7 +42,7 @@ def params_from_dict(cls, data: dict, base=None, where: str = ""):
     changes = {}
     for name, value in data.items():
         if name not in fields:
-            raise InputError(f"unknown parameter {where}{name!r} of {cls.__name__} (known: {', '.join(fields)})")
+            raise InputError(f"unknown parameter '{where}{name}' of {cls.__name__} (known: {', '.join(fields)})")
         current = getattr(base, name)
         if dataclasses.is_dataclass(current):
             changes[name] = params_from_dict(type(current), value, current, f"{where}{name}.")

@@ -167,6 +167,7 @@ def peak_in_view(model, pose, intrinsics, true_skyline: np.ndarray, tol_px: floa
 
     f = model.features
     uv, front = project(f.xyz, pose, intrinsics)
+    uv = np.where(np.isfinite(uv), uv, -1.0)  # points behind the camera
     u = np.floor(uv[:, 0]).astype(int)
     inside = front & (u >= 0) & (u < intrinsics.width) & (uv[:, 1] >= 0) & (uv[:, 1] < intrinsics.height)
     on = np.zeros(len(u), bool)
@@ -422,7 +423,7 @@ def write_plots(exp: Experiment, rows: list[dict]) -> list[str]:
                 ax.set_ylabel("mean seconds")
                 ax.tick_params(axis="x", rotation=20)
             ax.set_title(name)
-            if kind != "seconds":
+            if ax.get_legend_handles_labels()[0]:
                 ax.legend(fontsize=7)
         fig.tight_layout()
         path = os.path.join(exp.out, f"{kind}.png")

@@ -188,7 +188,7 @@ class DEM:
         if min(rows, cols) < 2:
             raise InputError(f"{self.name or 'DEM'}: too small for {factor} x {factor} blocks")
         z = self.elevation[: rows * factor, : cols * factor].reshape(rows, factor, cols, factor).mean(axis=(1, 3))
-        return DEM(z, self.transform * Affine.scale(factor), self.crs, f"{self.name} ({factor}x{factor} block mean)")
+        return DEM(z, self.transform @ Affine.scale(factor), self.crs, f"{self.name} ({factor}x{factor} block mean)")
 
     def fingerprint(self) -> str:
         """Stable hash of elevations, grid and CRS (to refuse mismatched models)."""

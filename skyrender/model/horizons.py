@@ -66,4 +66,6 @@ def build_horizons(terrain: Terrain, params: HorizonParams = HorizonParams()) ->
     centres = viewpoint_grid(terrain, grid_spacing(terrain.dem.extent, params), params.height)
     centres = centres[np.isfinite(centres[:, 2])]
     elevation = render_horizons(terrain, centres, params.bin_deg, params.near_m)
-    return Horizons(centres, elevation, params.bin_deg)
+    # at the precision a saved model keeps (float16: 0.03 deg at 60 deg), so that a model
+    # localizes the same freshly built as loaded from its cache
+    return Horizons(centres, elevation.astype(np.float16).astype(np.float32), params.bin_deg)
