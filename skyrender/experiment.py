@@ -270,10 +270,29 @@ def run_experiment(exp: Experiment, *, workers: int | None = None, scheduler: st
     """Run every (dataset, view, configuration) not yet in results.jsonl, then write the tables
     and plots from all rows. Returns {"rows": [...], "tables": markdown}."""
     workers = exp.workers if workers is None else workers
-    os.makedirs(exp.out, exist_ok=True)
+    created = not os.path.exists(exp.out)
+    try:
+        os.makedirs(exp.out, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"cannot write results to {exp.out}: {exc.strerror}") from None
     results_path = os.path.join(exp.out, "results.jsonl")
     done, rows = _done_keys(results_path)
-    model_seconds: dict[str, float] = {}
+    try:
+        _run_all(exp, done, rows, results_path, workers, scheduler, progress)
+    except BaseException:
+        if created and not rows:  # nothing ran: leave no folder behind
+            import shutil
+
+            shutil.rmtree(exp.out, ignore_errors=True)
+        raise
+    tables = write_tables(exp, rows)
+    write_plots(exp, rows)
+    return {"rows": rows, "tables": tables}
+
+
+def _run_all(exp: Experiment, done: set, rows: list[dict], results_path: str, workers: int, scheduler: str | None,
+             progress: bool) -> None:
+    """Every (dataset, view, configuration) not in ``done``, appended to results.jsonl and ``rows``."""
     with open(results_path, "a") as sink:
         def keep(row):
             sink.write(json.dumps(row, sort_keys=True) + "\n")
@@ -293,14 +312,10 @@ def run_experiment(exp: Experiment, *, workers: int | None = None, scheduler: st
                 _run_on_dask(ref, path, manifest, todo, keep, workers, scheduler, progress)
                 continue
             localizer = _Localizer(manifest)
-            model_seconds[ref.name] = localizer.seconds
             for view, conf in _bar(todo, f"{ref.name}", progress):
                 row = localizer.run(view, conf)
                 keep({"dataset": ref.name, "view": view["index"], "configuration": conf.name,
                       "model_seconds": localizer.seconds, **row})
-    tables = write_tables(exp, rows)
-    write_plots(exp, rows)
-    return {"rows": rows, "tables": tables}
 
 
 def _run_on_dask(ref, path, manifest, todo, keep, workers, scheduler, progress) -> None:

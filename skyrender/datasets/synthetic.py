@@ -301,19 +301,30 @@ def write_dataset(scene_path: str, n: int, out: str, seed: int = 0, *, progress:
     spec = dataset_spec(scene.dataset)
     info = manifest(scene_path, os.path.abspath(out), scene, seed, n, spec)
     _check_same_dataset(out, info)
-    os.makedirs(os.path.join(out, "views"), exist_ok=True)
+    created = not os.path.exists(out)
+    try:
+        os.makedirs(os.path.join(out, "views"), exist_ok=True)
+        with open(os.path.join(out, "manifest.json"), "w") as f:  # first: a resumed run checks against it
+            json.dump(info, f, indent=1, sort_keys=True)
+    except OSError as exc:
+        raise InputError(f"cannot write the dataset to {out}: {exc.strerror}") from None
     jpeg = spec.realism.jpeg_quality > 0
     todo = [i for i in range(n) if i not in set(finished_views(out, n, jpeg))]
-    if todo and (workers or scheduler):
-        render_on_dask(scene_path, todo, out, seed, workers=workers, scheduler=scheduler, progress=progress)
-    elif todo:
-        from ..render import Terrain
+    try:
+        if todo and (workers or scheduler):
+            render_on_dask(scene_path, todo, out, seed, workers=workers, scheduler=scheduler, progress=progress)
+        elif todo:
+            from ..render import Terrain
 
-        terrain = Terrain(scene.dem)
-        for i in _progress(todo, "rendering views", progress):
-            write_view(out, i, render_view(terrain, i, seed, spec), spec.realism.jpeg_quality)
-    with open(os.path.join(out, "manifest.json"), "w") as f:
-        json.dump(info, f, indent=1, sort_keys=True)
+            terrain = Terrain(scene.dem)
+            for i in _progress(todo, "rendering views", progress):
+                write_view(out, i, render_view(terrain, i, seed, spec), spec.realism.jpeg_quality)
+    except BaseException:
+        if created and not finished_views(out, n, jpeg):  # nothing of value written: leave no folder behind
+            import shutil
+
+            shutil.rmtree(out, ignore_errors=True)
+        raise
     return info
 
 
