@@ -14,6 +14,7 @@ import time
 import numpy as np
 
 from .errors import InputError
+from .evaluate import angle_differences, position_errors
 
 
 def run_demo(scene_path: str, out_dir: str) -> int:
@@ -48,8 +49,8 @@ def run_demo(scene_path: str, out_dir: str) -> int:
             continue
         est = result.pose
         truth = p.array()
-        d_pos = float(np.hypot(est[0] - truth[0], est[1] - truth[1]))
-        d_ang = np.abs((est[3:] - truth[3:] + 180.0) % 360.0 - 180.0)
+        d_pos = float(position_errors(est, truth)[0])
+        d_ang = np.abs(angle_differences(est[3:], truth[3:]))
         print(f"  localized: x={est[0]:.1f} y={est[1]:.1f} z={est[2]:.1f} pan={est[3]:.2f} tilt={est[4]:.2f} "
               f"swing={est[5]:.2f}; confidence {result.confidence:.2f}; {result.hypotheses} hypotheses, "
               f"{result.seconds:.1f} s")

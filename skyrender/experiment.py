@@ -89,7 +89,7 @@ def load_experiment(path: str, out: str | None = None) -> Experiment:
     try:
         with open(path, "rb") as f:
             spec = tomllib.load(f)
-    except (OSError, tomllib.TOMLDecodeError) as exc:
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise InputError(f"cannot read experiment {path}: {exc}") from None
     here = os.path.dirname(os.path.abspath(path))
 

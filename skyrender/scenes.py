@@ -52,7 +52,7 @@ def load_scene(path) -> Scene:
     try:
         with open(path, "rb") as fh:
             spec = tomllib.load(fh)
-    except (OSError, tomllib.TOMLDecodeError) as exc:
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise InputError(f"cannot read scene {path}: {exc}") from None
     dem_ref = spec.get("dem")
     if not dem_ref:

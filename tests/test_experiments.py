@@ -248,3 +248,26 @@ def test_experiment_command_names_a_bad_config(tmp_path, capsys):
     config.write_text('[[datasets]]\npath = "x"\n[configurations.a]\noverrides = { chunks = 3 }\n')
     assert cli_main(["experiment", str(config)]) == 2
     assert "unknown parameter 'chunks'" in capsys.readouterr().err
+
+
+def test_every_scene_file_reads_and_names_an_existing_dem():
+    """scenes/*.toml: TOML with a DEM (built in, or a file that exists where ../shared/data is)
+    and a valid [dataset] recipe; the built-in ones load."""
+    import tomllib
+
+    from skyrender.datasets.synthetic import dataset_spec
+    from skyrender.dem.io import BUILTIN_DEMS
+    from skyrender.scenes import load_scene
+
+    scenes = sorted((Path(__file__).resolve().parents[1] / "scenes").glob("*.toml"))
+    assert len(scenes) >= 20
+    shared = Path(__file__).resolve().parents[2] / "shared" / "data" / "dem"
+    for path in scenes:
+        spec = tomllib.loads(path.read_text())
+        dataset_spec(spec.get("dataset"))
+        if spec["dem"] in BUILTIN_DEMS:
+            assert load_scene(path).dem.shape[0] > 100
+        else:
+            assert spec["dem"].startswith("../../shared/data/dem/")
+            if shared.exists():
+                assert (path.parent / spec["dem"]).resolve().exists(), path.name

@@ -26,6 +26,7 @@ from scipy.optimize import least_squares
 
 from ..camera import CURVATURE_COEFF, Intrinsics, Pose, project
 from ..dem.synthetic import fractal_terrain
+from ..evaluate import orientation_errors, position_errors
 from ..features import extract_skyline
 from ..localizer import LocalizeParams, localize
 from ..localizer.hypotheses import generate_hypotheses
@@ -92,9 +93,7 @@ def solver_benchmark(terrain, model, intr, pose, n_loop: int = 300) -> dict:
 
 
 def _errors(result, truth: np.ndarray) -> tuple[float, float]:
-    d_pos = float(np.hypot(*(result.pose[:2] - truth[:2])))
-    d_ang = float(np.max(np.abs((result.pose[3:] - truth[3:] + 180.0) % 360.0 - 180.0)))
-    return d_pos, d_ang
+    return float(position_errors(result.pose, truth)[0]), float(orientation_errors(result.pose, truth)[0])
 
 
 def main(argv=None) -> int:

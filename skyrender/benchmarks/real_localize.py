@@ -26,7 +26,7 @@ import numpy as np
 
 from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
 from ..diagnostics.oracle import DEM_DIR, tiles_around
-from ..evaluate import git_commit
+from ..evaluate import git_commit, position_errors
 
 HALF_LAT, HALF_LON = 0.6, 0.7  # degrees either side of the place's centre
 RECALL_M = (100.0, 250.0, 1000.0)
@@ -84,7 +84,7 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
                    "stage_seconds": result.stats.to_dict()["seconds"], "best_score": result.stats.best_score,
                    "runner_up_score": result.stats.runner_up_score}
             if result.localized:
-                row["error_m"] = float(np.hypot(result.pose[0] - tx, result.pose[1] - ty))
+                row["error_m"] = float(position_errors(result.pose, np.array([tx, ty]))[0])
                 row["fov"] = result.fov
             rows.append(row)
             if progress:

@@ -7,7 +7,8 @@ asked for.
 Inputs (seeded): DEM files of each format (.hgt, GeoTIFF, .asc, .npy, .npz) truncated,
 with bytes flipped, all-NaN, all-void, one row, huge or infinite values; images (PNG,
 JPEG) truncated or corrupt, CMYK, 16-bit, gray with alpha, 1 x 1 and 100000 x 2;
-model directories corrupt, truncated or foreign; and out-of-range or malformed flags.
+model directories corrupt, truncated or foreign; scene files for ``dataset`` and configs
+for ``experiment`` with bad tables, values or bytes; and out-of-range or malformed flags.
 Each case runs in this process through :func:`skyrender.cli.main` with file
 descriptor 2 redirected, so a native decoder's own stderr line counts too. Reported:
 cases tried, failures (with the case and what went wrong), seconds.
@@ -240,6 +241,55 @@ def _bad_flags(rng: np.random.Generator, dem: str, image: str, model: str) -> li
     return cases
 
 
+SCENE_BODIES = (
+    '[dataset.sampling]\nsize = [32, 24]\nmax_draws = 5\n',
+    '[dataset.sampling]\nsize = "big"\n',
+    '[dataset.sampling]\nfov_deg = [80.0, 10.0]\n',
+    '[dataset.realism]\nskies = ["green"]\n',
+    '[dataset.realism]\njpeg_quality = 500\n',
+    '[dataset]\nsampling = 3\n',
+    '[dataset.sampling]\nunknown_knob = 1\n',
+    'dataset = "x"\n',
+    '[[views]]\nname = "v"\n',
+)
+
+
+def _scene_files(work: str, rng: np.random.Generator, dems: list[str], n: int) -> list[str]:
+    """Scene files for ``skyrender dataset``: damaged DEMs, bad tables and values, garbled TOML."""
+    paths = []
+    for i in range(n):
+        body = SCENE_BODIES[int(rng.integers(len(SCENE_BODIES)))]
+        text = f'dem = "{dems[int(rng.integers(len(dems)))]}"\n{body}'
+        data = text.encode()
+        if rng.random() < 0.25:
+            data = _mutate_bytes(data, rng)
+        path = os.path.join(work, f"scene{i}.toml")
+        with open(path, "wb") as f:
+            f.write(data)
+        paths.append(path)
+    return paths
+
+
+def _experiment_files(work: str, rng: np.random.Generator, n: int) -> list[str]:
+    """Experiment configs: no datasets, unknown fields, folders that are not datasets, garbled TOML."""
+    bodies = ('[[datasets]]\npath = "nowhere"\n[configurations.a]\n',
+              '[[datasets]]\npath = "."\n[configurations.a]\noverrides = { chunk = "x" }\n',
+              '[[datasets]]\nname = "a"\n[configurations.a]\n',
+              '[configurations.a]\npreset = "fast"\n',
+              '[[datasets]]\npath = "."\n[configurations.a]\nprior = "psychic"\n',
+              '[[datasets]]\nch1 = "validation"\nbogus = 1\n[configurations.a]\n')
+    paths = []
+    for i in range(n):
+        data = bodies[int(rng.integers(len(bodies)))].encode()
+        if rng.random() < 0.25:
+            data = _mutate_bytes(data, rng)
+        path = os.path.join(work, f"experiment{i}.toml")
+        with open(path, "wb") as f:
+            f.write(data)
+        paths.append(path)
+    return paths
+
+
 def make_cases(work: str, n: int, seed: int, valid_model: str) -> list[Case]:
     """About ``n`` cases in the work directory ``work`` (inputs written there)."""
     rng = np.random.default_rng(seed)
@@ -258,6 +308,12 @@ def make_cases(work: str, n: int, seed: int, valid_model: str) -> list[Case]:
         cases.append(Case(f"mesh {os.path.basename(d)}", ["mesh", d, "--out", "t.ply"], ("t.ply", "t.xml")))
     for img in images:
         cases.append(Case(f"skyline {os.path.basename(img)}", ["skyline", img, "--json"]))
+    for scene in _scene_files(work, rng, dems[::6], max(2, n // 40)):
+        cases.append(Case(f"dataset {os.path.basename(scene)}", ["dataset", scene, "--n", "1", "--out", "ds", "--quiet"],
+                          ("ds",)))
+    for config in _experiment_files(work, rng, max(2, n // 60)):
+        cases.append(Case(f"experiment {os.path.basename(config)}", ["experiment", config, "--out", "res", "--quiet"],
+                          ("res",)))
     for m in models:
         cases.append(Case(f"localize --model {os.path.basename(m)}", ["localize", image, "--model", m, "--height", "2",
                                                                      "--fov", "50", "--json"]))
