@@ -254,40 +254,41 @@ SCENE_BODIES = (
 )
 
 
-def _scene_files(work: str, rng: np.random.Generator, dems: list[str], n: int) -> list[str]:
-    """Scene files for ``skyrender dataset``: damaged DEMs, bad tables and values, garbled TOML."""
+EXPERIMENT_BODIES = (
+    '[[datasets]]\npath = "nowhere"\n[configurations.a]\n',
+    '[[datasets]]\npath = "."\n[configurations.a]\noverrides = { chunk = "x" }\n',
+    '[[datasets]]\nname = "a"\n[configurations.a]\n',
+    '[configurations.a]\npreset = "fast"\n',
+    '[[datasets]]\npath = "."\n[configurations.a]\nprior = "psychic"\n',
+    '[[datasets]]\nch1 = "validation"\nbogus = 1\n[configurations.a]\n',
+)
+
+
+def _toml_files(work: str, rng: np.random.Generator, texts: list[str], prefix: str) -> list[str]:
+    """The texts written as ``prefix<i>.toml``, a quarter of them with damaged bytes."""
     paths = []
-    for i in range(n):
-        body = SCENE_BODIES[int(rng.integers(len(SCENE_BODIES)))]
-        text = f'dem = "{dems[int(rng.integers(len(dems)))]}"\n{body}'
+    for i, text in enumerate(texts):
         data = text.encode()
         if rng.random() < 0.25:
             data = _mutate_bytes(data, rng)
-        path = os.path.join(work, f"scene{i}.toml")
+        path = os.path.join(work, f"{prefix}{i}.toml")
         with open(path, "wb") as f:
             f.write(data)
         paths.append(path)
     return paths
+
+
+def _scene_files(work: str, rng: np.random.Generator, dems: list[str], n: int) -> list[str]:
+    """Scene files for ``skyrender dataset``: damaged DEMs, bad tables and values, garbled TOML."""
+    texts = [f'dem = "{dems[int(rng.integers(len(dems)))]}"\n{SCENE_BODIES[int(rng.integers(len(SCENE_BODIES)))]}'
+             for _ in range(n)]
+    return _toml_files(work, rng, texts, "scene")
 
 
 def _experiment_files(work: str, rng: np.random.Generator, n: int) -> list[str]:
     """Experiment configs: no datasets, unknown fields, folders that are not datasets, garbled TOML."""
-    bodies = ('[[datasets]]\npath = "nowhere"\n[configurations.a]\n',
-              '[[datasets]]\npath = "."\n[configurations.a]\noverrides = { chunk = "x" }\n',
-              '[[datasets]]\nname = "a"\n[configurations.a]\n',
-              '[configurations.a]\npreset = "fast"\n',
-              '[[datasets]]\npath = "."\n[configurations.a]\nprior = "psychic"\n',
-              '[[datasets]]\nch1 = "validation"\nbogus = 1\n[configurations.a]\n')
-    paths = []
-    for i in range(n):
-        data = bodies[int(rng.integers(len(bodies)))].encode()
-        if rng.random() < 0.25:
-            data = _mutate_bytes(data, rng)
-        path = os.path.join(work, f"experiment{i}.toml")
-        with open(path, "wb") as f:
-            f.write(data)
-        paths.append(path)
-    return paths
+    return _toml_files(work, rng, [EXPERIMENT_BODIES[int(rng.integers(len(EXPERIMENT_BODIES)))] for _ in range(n)],
+                       "experiment")
 
 
 def make_cases(work: str, n: int, seed: int, valid_model: str) -> list[Case]:
