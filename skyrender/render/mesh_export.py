@@ -13,28 +13,11 @@ from __future__ import annotations
 
 import os
 
-import numpy as np
-
-from ..camera import curvature_coeff
 from ..dem import DEM
 from ..errors import InputError
-from .terrain import terrain_mesh_arrays
+from .terrain import terrain_trimesh
 
 MESH_SUFFIXES = (".ply", ".obj", ".glb")
-
-
-def terrain_trimesh(dem: DEM, *, world: bool = False, curvature: bool = False):
-    """The DEM's terrain as a ``trimesh.Trimesh`` (metres; x east, y north, z up)."""
-    import trimesh
-
-    origin = np.array(dem.centre, np.float64)
-    vertices, faces = terrain_mesh_arrays(dem, origin, curvature_coeff(curvature))
-    vertices = vertices.astype(np.float64)
-    if world:
-        vertices[:, :2] += origin
-    mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
-    mesh.metadata.update({"dem": dem.name, "crs": dem.crs, "origin_xy": [0.0, 0.0] if world else origin.tolist()})
-    return mesh
 
 
 def mitsuba_scene_xml(mesh_file: str) -> str:

@@ -2,8 +2,9 @@
 
 Vertices sit at cell centres in coordinates *local* to the DEM (x, y minus
 the DEM centre) so float32 stays precise to millimetres; two triangles per
-quad, split south-west to north-east (README, Conventions). The mesh is built in
-memory (``mi.Mesh`` + ``mi.traverse``), not through a PLY file.
+quad, split south-west to north-east (README, Conventions). The mesh is a
+``trimesh.Trimesh`` (:func:`terrain_trimesh`, what ``skyrender mesh`` exports) handed
+to Mitsuba in memory (``mi.Mesh`` + ``mi.traverse``), not through a PLY file.
 
 Earth curvature without rebuilding the mesh per camera: the terrain a
 camera at C sees is lowered by c |P - C|^2 (horizontal distance). Since
@@ -38,6 +39,34 @@ def terrain_mesh_arrays(dem: DEM, origin_xy, c: float) -> tuple[np.ndarray, np.n
     return vertices, faces
 
 
+def terrain_trimesh(dem: DEM, *, world: bool = False, curvature: bool = False):
+    """The DEM's terrain as a ``trimesh.Trimesh`` (metres; x east, y north, z up): the mesh
+    of :func:`terrain_mesh_arrays`, local to the DEM centre (or in world coordinates), lowered
+    by earth curvature and refraction seen from the DEM centre when ``curvature``. The
+    renderer hands exactly this mesh to Mitsuba; ``skyrender mesh`` writes it to a file."""
+    import trimesh
+
+    origin = np.array(dem.centre, np.float64)
+    vertices, faces = terrain_mesh_arrays(dem, origin, curvature_coeff(curvature))
+    vertices = vertices.astype(np.float64)
+    if world:
+        vertices[:, :2] += origin
+    mesh = trimesh.Trimesh(vertices=vertices, faces=faces, process=False, validate=False)
+    mesh.metadata.update({"dem": dem.name, "crs": dem.crs, "origin_xy": [0.0, 0.0] if world else origin.tolist()})
+    return mesh
+
+
+def mitsuba_scene(mi, vertices: np.ndarray, faces: np.ndarray):
+    """A Mitsuba scene of one mesh built in memory (``mi.Mesh`` + ``mi.traverse``) from
+    (V, 3) float32 vertices and (F, 3) uint32 faces."""
+    mesh = mi.Mesh("terrain", len(vertices), len(faces), has_vertex_normals=False, has_vertex_texcoords=False)
+    params = mi.traverse(mesh)
+    params["vertex_positions"] = type(params["vertex_positions"])(vertices.ravel())
+    params["faces"] = type(params["faces"])(faces.ravel())
+    params.update()
+    return mi.load_dict({"type": "scene", "terrain": mesh})
+
+
 class Terrain:
     """A DEM as a Mitsuba scene, with ray queries in world coordinates.
 
@@ -57,16 +86,13 @@ class Terrain:
         self.jit = is_jit(self.variant)
         cx, cy = dem.centre
         self.origin = np.array([cx, cy, 0.0])
-        vertices, faces = terrain_mesh_arrays(dem, self.origin[:2], self.c)
+        #: the terrain as a trimesh (local to the DEM centre, curvature applied as configured)
+        self.mesh = terrain_trimesh(dem, curvature=curvature)
+        vertices = np.ascontiguousarray(self.mesh.vertices, dtype=np.float32)  # exact: built in float32
+        faces = np.ascontiguousarray(self.mesh.faces, dtype=np.uint32)
         self.faces = faces
         self.vertices = vertices
-        mi = self.mi
-        mesh = mi.Mesh("terrain", len(vertices), len(faces), has_vertex_normals=False, has_vertex_texcoords=False)
-        params = mi.traverse(mesh)
-        params["vertex_positions"] = type(params["vertex_positions"])(vertices.ravel())
-        params["faces"] = type(params["faces"])(faces.ravel())
-        params.update()
-        self.scene = mi.load_dict({"type": "scene", "terrain": mesh})
+        self.scene = mitsuba_scene(self.mi, vertices, faces)
         xmin, xmax, ymin, ymax = dem.extent
         span = float(np.hypot(xmax - xmin, ymax - ymin))
         #: No ray needs to go further than this (metres): replaces the 10 km far clip.
