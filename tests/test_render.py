@@ -288,6 +288,16 @@ def test_the_exported_mesh_loads_in_trimesh_and_its_mitsuba_xml_renders_the_same
     hit = np.isfinite(t_ours)
     assert hit.mean() > 0.5
     np.testing.assert_allclose(t_xml[hit], t_ours[hit], atol=0.05)
+    # the renderer's own mesh is that trimesh, and the XML scene renders the same skyline
+    assert isinstance(terrain.mesh, trimesh.Trimesh)
+    np.testing.assert_array_equal(np.asarray(terrain.mesh.vertices, np.float32), terrain.vertices)
+    from_xml = Terrain(loaded, curvature=False)
+    from_xml.scene = scene
+    pose = loaded.camera_pose(float(loaded.x_centres[5]), float(loaded.y_centres[5]), 2.0, 135.0, 2.0, 0.0)
+    K = Intrinsics.from_fov(60.0, 160, 120)
+    sky, sky_xml = render_skylines(terrain, pose, K), render_skylines(from_xml, pose, K)
+    assert np.isfinite(sky).mean() > 0.5
+    np.testing.assert_allclose(sky_xml, sky, atol=0.05)
     # world coordinates and the other formats
     assert main(["mesh", str(tmp_path / "dem.npz"), "--out", str(tmp_path / "w.obj"), "--world"]) == 0
     world = trimesh.load(tmp_path / "w.obj", process=False)
