@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: install demo test fuzz fit-photo-confidence bench bench-render bench-skyline bench-localize bench-real oracle train-sky-net clean
+.PHONY: install demo test fuzz fit-photo-confidence bench bench-render bench-skyline bench-localize bench-real oracle train-sky-net experiment-naval2000 clean
 
 install: $(STAMP)
 
@@ -54,6 +54,11 @@ train-sky-net: install
 	$(BIN)/python -m pip install -q -e '.[dev,train]'
 	$(BIN)/python -m skyrender.training.sky_net --steps 4000 --seed 0 --renders 0 --threads 1
 	$(BIN)/python -m skyrender.training.skyline_fit
+
+# the paper's experiment: 2 scenes x 2 seeds x 25 rendered views, three configurations (~40 min);
+# datasets are written from their recipes on the first run, finished views are skipped on the next
+experiment-naval2000: install
+	$(BIN)/skyrender experiment experiments/naval2000.toml
 
 bench-render: install
 	$(BIN)/python -m skyrender.benchmarks.renderer

@@ -367,6 +367,16 @@ def test_photo_confidence_is_a_logistic_of_the_margin_to_the_runner_up():
     assert photo.confidence_model == "margin" and photo.runner_up_m >= 1000.0 and photo.horizon.terms == 2
 
 
+
+def test_the_photo_abstention_threshold_clears_every_wrong_training_answer():
+    from skyrender.training.localize_fit import abstain_threshold
+
+    conf = np.array([0.99, 0.83, 0.73, 0.12, np.nan])
+    right = np.array([True, True, False, False, False])
+    assert abstain_threshold(conf, right) == pytest.approx(0.75)  # above the wrong 0.73
+    assert abstain_threshold(conf[[0, 1, 3]], right[[0, 1, 3]]) == 0.5  # never below 0.5
+    assert abstain_threshold(np.array([0.97]), np.array([False])) == 1.0
+
 def test_localizes_from_the_far_horizons_alone(scene, views):
     """No peak hypotheses at all (two image peaks taken): the far-horizon poses, verified
     and refined, localize view 1 (whose matched peaks lie at opposite edges of the frame)."""

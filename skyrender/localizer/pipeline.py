@@ -53,20 +53,28 @@ FOV_CANDIDATES = (30.0, 40.0, 50.0, 60.0, 70.0)
 PHOTO_CONFIDENCE_FILE = os.path.join(os.path.dirname(__file__), "photo_confidence.json")
 
 
-def _photo_margin_logit() -> tuple[float, float]:
+def _photo_confidence_fit() -> dict:
     try:
         with open(PHOTO_CONFIDENCE_FILE) as f:
-            a, b = json.load(f)["logit"]
+            return json.load(f)
+    except (OSError, ValueError):
+        return {}  # not fitted yet
+
+
+def _photo_margin_logit(fit: dict) -> tuple[float, float]:
+    try:
+        a, b = fit["logit"]
         return float(a), float(b)
-    except (OSError, ValueError, KeyError, TypeError):
-        return 0.0, 1.0  # not fitted yet
+    except (KeyError, TypeError, ValueError):
+        return 0.0, 1.0
 
 
-PHOTO_MARGIN_LOGIT = _photo_margin_logit()
-#: Abstain below this photo confidence (a fitted P(within 1 km)): more likely right than not.
-#: On the 16 CH1 training photos of the fit (hybrid skylines) the six right answers scored
-#: 0.83-1.00 and the wrong ones 0.12 or less.
-PHOTO_MIN_CONFIDENCE = 0.5
+_FIT = _photo_confidence_fit()
+PHOTO_MARGIN_LOGIT = _photo_margin_logit(_FIT)
+#: Abstain below this photo confidence (a fitted P(within 1 km)), chosen by the fit's rule on
+#: the training photos (``localize_fit.abstain_threshold``): above every wrong answer there, and
+#: at least 0.5.
+PHOTO_MIN_CONFIDENCE = float(_FIT.get("min_confidence", 0.8))
 
 
 @dataclass(frozen=True)
