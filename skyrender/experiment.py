@@ -184,7 +184,6 @@ class _Localizer:
 
     def __init__(self, manifest: dict):
         from .dem import load_dem
-        from .model import ModelParams, cached_model
         from .render import Terrain
         from .scenes import load_scene
 
@@ -195,8 +194,19 @@ class _Localizer:
         block = int(manifest["realism"].get("localize_dem_block", 1))
         self.dem = dem.coarsened(block)  # DEM mismatch: the model knows only the coarser DEM
         self.terrain = Terrain(self.dem)
-        self.model = cached_model(self.dem, ModelParams(), terrain=self.terrain)
+        self._models = {}
+        self.model_for("render")
         self.seconds = time.perf_counter() - t
+
+    def model_for(self, preset: str):
+        """The model a preset localizes with (the photo preset's has denser, nearer horizons),
+        from the cache or built once."""
+        from .model import ModelParams, cached_model
+
+        if preset not in self._models:
+            params = ModelParams.for_photos() if preset == "photo" else ModelParams()
+            self._models[preset] = cached_model(self.dem, params, terrain=self.terrain)
+        return self._models[preset]
 
     def run(self, view: dict, conf: Configuration) -> dict:
         from .camera import Intrinsics, Pose
@@ -204,15 +214,16 @@ class _Localizer:
         from .localizer import localize
 
         params = conf.params()
+        model = self.model_for(conf.preset)
         truth = Pose(*(float(view[k]) for k in ("x", "y", "z", "pan", "tilt", "swing")))
         intrinsics = Intrinsics.from_fov(float(view["fov"]), int(view["width"]), int(view["height"]))
         prior_id = None
         if conf.prior == "peak-in-view":
-            prior_id = peak_in_view(self.model, truth, intrinsics, np.load(view["paths"]["skyline"]))
+            prior_id = peak_in_view(model, truth, intrinsics, np.load(view["paths"]["skyline"]))
         t = time.perf_counter()
         image = load_photo(view["paths"]["image"])
         skyline = extract_skyline(image, SkylineParams(method=params.skyline_method))
-        result = localize(image, self.model, float(view["height_above_ground"]),
+        result = localize(image, model, float(view["height_above_ground"]),
                           float(view["fov"]) if conf.fov == "known" else None,
                           None if prior_id is None else {"ids": [prior_id]}, terrain=self.terrain, skyline=skyline,
                           params=params)
@@ -323,7 +334,9 @@ def _run_on_dask(ref, path, manifest, todo, keep, workers, scheduler, progress) 
 
     from .scale import dask_client
 
-    _Localizer(manifest)  # builds and caches the model once, before the workers load it
+    local = _Localizer(manifest)  # builds and caches the models once, before the workers load them
+    for preset in {conf.preset for _, conf in todo}:
+        local.model_for(preset)
     with dask_client(workers=workers, scheduler=scheduler) as client:
         futures = {client.submit(_task, path, view, conf, pure=False): (view, conf) for view, conf in todo}
         for future in _bar(as_completed(futures), ref.name, progress, total=len(futures)):
