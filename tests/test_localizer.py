@@ -368,6 +368,22 @@ def test_photo_confidence_is_a_logistic_of_the_margin_to_the_runner_up():
 
 
 
+def test_a_benchmark_run_is_rescored_under_another_confidence_without_moving_a_pose():
+    from skyrender.benchmarks.real_localize import rescore
+
+    rows = [{"photo": "a", "status": "localized", "confidence": 0.9, "best_score": 1.0, "runner_up_score": 2.0,
+             "error_m": 120.0},
+            {"photo": "b", "status": "localized", "confidence": 0.6, "best_score": 1.8, "runner_up_score": 2.0,
+             "error_m": 40000.0},
+            {"photo": "c", "status": "abstained", "confidence": 0.1, "best_score": 2.0, "runner_up_score": 2.0}]
+    out = rescore(rows, (-3.0, 20.0), 0.9)  # margins 0.5, 0.1, 0
+    assert [r["status"] for r in out] == ["localized", "abstained", "abstained"]
+    assert out[0]["error_m"] == 120.0 and out[1]["withheld_error_m"] == 40000.0 and "error_m" not in out[1]
+    assert rows[1]["status"] == "localized"  # the input is left as it was
+    with pytest.raises(ValueError, match="run the benchmark again"):
+        rescore(rows, (5.0, 0.0), 0.5)  # would answer for c, whose pose the run did not keep
+
+
 def test_the_photo_abstention_threshold_clears_every_wrong_training_answer():
     from skyrender.training.localize_fit import abstain_threshold
 

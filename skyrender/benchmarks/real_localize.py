@@ -105,6 +105,26 @@ def summary(rows: list[dict]) -> dict:
     return out
 
 
+def rescore(rows: list[dict], logit: tuple[float, float], threshold: float) -> list[dict]:
+    """The rows under another photo confidence (logistic ``logit`` of the margin, abstaining
+    below ``threshold``): the poses do not depend on it, so an answer stays or becomes an
+    abstention (its error kept as ``withheld_error_m``). An abstention that the new confidence
+    would answer needs a new run (its pose was not kept): ValueError."""
+    from ..localizer.pipeline import margin_confidence
+
+    out = []
+    for r in rows:
+        r = dict(r)
+        if r.get("best_score") is not None:
+            r["confidence"] = float(margin_confidence(r["best_score"], r.get("runner_up_score") or np.inf, logit))
+        if r["status"] == "localized" and r["confidence"] < threshold:
+            r["status"], r["withheld_error_m"] = "abstained", r.pop("error_m")
+        elif r["status"] != "localized" and r["confidence"] >= threshold:
+            raise ValueError(f"{r['photo']}: abstained in the run but answers now; run the benchmark again")
+        out.append(r)
+    return out
+
+
 def table(report: dict) -> str:
     """The per-photo table and the summaries. An abstention's confidence is the one it
     fell short with (from the best and runner-up scores the row keeps)."""
@@ -132,6 +152,8 @@ def main(argv=None) -> int:
     parser.add_argument("--unknown-every", type=int, default=1, help="the fov-unknown mode on every K-th photo only")
     parser.add_argument("--out", default=os.path.join(REPO, "experiments", "ch1"))
     parser.add_argument("--retable", action="store_true", help="rewrite the text table from the run's JSON")
+    parser.add_argument("--rescore", action="store_true", help="with --retable: apply the current photo confidence "
+                        "fit and threshold to the run's rows (their poses do not depend on it)")
     args = parser.parse_args(argv)
     if not os.path.isdir(DEFAULT_PHOTOS):
         print(f"no photos at {DEFAULT_PHOTOS}")
@@ -142,6 +164,12 @@ def main(argv=None) -> int:
     if args.retable:  # rewrite the text table of a finished run from its JSON
         with open(os.path.join(args.out, f"bench-real-{args.side}.json")) as f:
             report = json.load(f)
+        if args.rescore:
+            from ..localizer.pipeline import PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE
+
+            report["photos"] = rescore(report["photos"], PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE)
+            report["rescored"] = {"at": git_commit(), "logit": list(PHOTO_MARGIN_LOGIT),
+                                  "min_confidence": PHOTO_MIN_CONFIDENCE}
     else:
         rows = run(items, args.fov, unknown_every=max(1, args.unknown_every))
         report = {"commit": git_commit(), "cpus": os.cpu_count(), "side": args.side, "photos": rows}
@@ -152,7 +180,12 @@ def main(argv=None) -> int:
     with open(os.path.join(args.out, f"bench-real-{args.side}.json"), "w") as f:
         json.dump(report, f, indent=1)
     with open(os.path.join(args.out, f"bench-real-{args.side}.txt"), "w") as f:
-        f.write(f"commit {report['commit']}, {report['cpus']} CPUs, side {args.side}\n\n{text}\n")
+        head = f"commit {report['commit']}, {report['cpus']} CPUs, side {args.side}"
+        if "rescored" in report:
+            rs = report["rescored"]
+            head += (f"; confidences rescored at {rs['at']} (logit {rs['logit'][0]:.3f} + {rs['logit'][1]:.3f} m, "
+                     f"abstain below {rs['min_confidence']:.2f})")
+        f.write(f"{head}\n\n{text}\n")
     return 0
 
 
