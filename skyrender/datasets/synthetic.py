@@ -3,8 +3,8 @@
 Views are drawn the way photographs are taken, independently of the localizer:
 a camera at a random position, ``height_m`` above the ground, turned towards the
 part of its panorama (terrain beyond ``far_m``) with the most relief, tilted so that
-the skyline sits in the upper part of the frame, with a random swing and field of
-view; a view is kept when its true skyline crosses the frame (``min_terrain_columns``)
+the skyline sits in the upper part of the frame (or at a tilt drawn from ``tilt_deg``),
+with a random swing and field of view; a view is kept when its true skyline crosses the frame (``min_terrain_columns``)
 with enough relief (``min_relief`` of the image height, 5th to 95th percentile) and is
 terrain beyond ``far_m`` on ``far_share`` of its columns (a photo of mountains, not of
 the slope beside the camera). Nothing the localizer
@@ -52,6 +52,7 @@ class Sampling:
     size: tuple = (640, 480)  # image width, height (px)
     swing_deg: float = 15.0  # uniform in +-this
     skyline_above_centre: tuple = (0.0, 0.3)  # the skyline's median sits this share of the height above the centre
+    tilt_deg: tuple | None = None  # instead: the tilt drawn in this range (e.g. a level camera, as the paper's)
     min_relief: float = 0.04  # the true skyline spans at least this share of the image height (5th-95th pct)
     min_terrain_columns: float = 0.95  # share of columns whose skyline lies inside the frame
     far_m: float = 1000.0  # photos are of mountains: the skyline is terrain at least this far away...
@@ -144,6 +145,8 @@ def sample_view(terrain, index: int, seed: int, sampling: Sampling):
         centre = (np.arange(-int(intrinsics.fov) // 2, int(intrinsics.fov) // 2 + 1) + int(round(pan))) % 360
         above = _uniform(rng, sampling.skyline_above_centre) * H
         tilt = float(np.median(horizon[centre])) - np.degrees(np.arctan(above / intrinsics.f_px))
+        if sampling.tilt_deg is not None:
+            tilt = _uniform(rng, sampling.tilt_deg)
         swing = _uniform(rng, (-sampling.swing_deg, sampling.swing_deg))
         pose = dem.camera_pose(x, y, height, pan, tilt, swing)
         skyline = render_skylines(terrain, pose, intrinsics)
