@@ -44,9 +44,9 @@ oracle: install
 bench-localize: install
 	$(BIN)/python -m skyrender.benchmarks.localizer
 
-# refit the photo confidence of the localizer on 16 CH1 photos of the training side (~12 min)
+# refit the photo confidence of the localizer on 40 CH1 photos of the training side (~25 min)
 fit-photo-confidence: install
-	$(BIN)/python -m skyrender.training.localize_fit --limit 16
+	$(BIN)/python -m skyrender.training.localize_fit --limit 40
 
 # retrain the sky network and refit the boundary search on the training split (CPU, ~10 min);
 # reproduces skyrender/features/weights/ for the seed
