@@ -445,6 +445,7 @@ def experiment(
     workers: Optional[int] = typer.Option(None, "--workers", help="run on a local Dask cluster of this many processes"),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="run on this Dask scheduler (tcp://host:port)"),
     quiet: bool = typer.Option(False, "--quiet", help="no progress bars"),
+    tables_only: bool = typer.Option(False, "--tables-only", help="run nothing: tables and plots of the results so far"),
 ):
     """Localize every view of the datasets with every configuration; write results, tables and plots."""
     from .experiment import load_experiment, run_experiment
@@ -452,7 +453,7 @@ def experiment(
     if workers is not None and workers < 0:
         raise InputError(f"--workers must be >= 0, got {workers}")
     exp = load_experiment(str(config), None if out is None else str(out))
-    result = run_experiment(exp, workers=workers, scheduler=scheduler, progress=not quiet)
+    result = run_experiment(exp, workers=workers, scheduler=scheduler, progress=not quiet, tables_only=tables_only)
     typer.echo(result["tables"])
     typer.echo(f"results in {exp.out}")
 

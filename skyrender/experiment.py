@@ -277,9 +277,10 @@ def _done_keys(path: str) -> tuple[set, list[dict]]:
 
 
 def run_experiment(exp: Experiment, *, workers: int | None = None, scheduler: str | None = None,
-                   progress: bool = True) -> dict:
-    """Run every (dataset, view, configuration) not yet in results.jsonl, then write the tables
-    and plots from all rows. Returns {"rows": [...], "tables": markdown}."""
+                   progress: bool = True, tables_only: bool = False) -> dict:
+    """Run every (dataset, view, configuration) not yet in results.jsonl (none with
+    ``tables_only``: a partial run's tables), then write the tables and plots from all rows.
+    Returns {"rows": [...], "tables": markdown}."""
     workers = exp.workers if workers is None else workers
     created = not os.path.exists(exp.out)
     try:
@@ -289,7 +290,8 @@ def run_experiment(exp: Experiment, *, workers: int | None = None, scheduler: st
     results_path = os.path.join(exp.out, "results.jsonl")
     done, rows = _done_keys(results_path)
     try:
-        _run_all(exp, done, rows, results_path, workers, scheduler, progress)
+        if not tables_only:
+            _run_all(exp, done, rows, results_path, workers, scheduler, progress)
     except BaseException:
         if created and not rows:  # nothing ran: leave no folder behind
             import shutil

@@ -239,6 +239,10 @@ def test_an_experiment_resumes_and_dask_gives_the_local_results(tiny_experiment,
     before = results.read_text()
     assert _stable(run_experiment(exp, progress=False)["rows"]) == _stable(result["rows"])
     assert results.read_text() == before  # nothing ran again
+    partial = replace(exp, out=str(tmp_path / "partial"))
+    os.makedirs(partial.out)
+    (Path(partial.out) / "results.jsonl").write_text("".join(before.splitlines(True)[:2]))
+    assert len(run_experiment(partial, progress=False, tables_only=True)["rows"]) == 2  # tables of 2 lines, nothing run
     on_dask = run_experiment(replace(exp, out=str(tmp_path / "dask")), workers=2, progress=False)
     assert _stable(on_dask["rows"]) == _stable(result["rows"])
 
