@@ -52,6 +52,12 @@ def test_localize_params_round_trip_through_dicts_and_name_unknown_fields():
     changed = LocalizeParams.from_dict({"final_refinements": 2, "horizon": {"tilts": [0.0, 15.0]}}, photo)
     assert changed.final_refinements == 2 and changed.horizon.tilts == (0.0, 15.0)
     assert changed.min_confidence == photo.min_confidence and changed.horizon.terms == photo.horizon.terms
+    # the tuning constants of the solver, the order and the refinement are fields too
+    tuned = LocalizeParams.from_dict({"gn_iterations": 2, "prior_boost": 10.0,
+                                      "refine": {"search_levels": [[40, 40, 5, 5], [3, 3, 5, 5]], "sweep_stride": 4}})
+    assert tuned.gn_iterations == 2 and tuned.prior_boost == 10.0
+    assert tuned.refine.search_levels == ((40, 40, 5, 5), (3, 3, 5, 5)) and tuned.refine.sweep_stride == 4
+    assert tuned.refine.sweep_max_poses == LocalizeParams().refine.sweep_max_poses
     with pytest.raises(InputError, match="unknown parameter 'horizon.tilt'"):
         LocalizeParams.from_dict({"horizon": {"tilt": [0.0]}})
     with pytest.raises(InputError, match="takes a number"):

@@ -81,8 +81,15 @@ def test_solver_recovers_poses_from_exact_correspondences(scene):
     pos = np.hypot(*(poses[:, :2] - truth[:, :2]).T)
     ang = np.abs((poses[:, 3:] - truth[:, 3:] + 180) % 360 - 180).max(axis=1)
     exact = (pos < 1e-3) & (ang < 1e-6)
-    assert exact.mean() > 0.7
-    assert np.all(residual[exact] < 1e-3)
+    # measured: 78.7 % to a millimetre, 81.3 % within 1 m; every pose more than 1 m off
+    # (the resection's other solutions) has a residual of 0.23 px or more, so the residual
+    # is what rejects them
+    assert exact.mean() > 0.75 and np.mean(pos < 1.0) > 0.78
+    assert np.all(residual[exact] < 1e-5)
+    assert np.all(residual[pos > 1.0] > 0.2)
+    # the Gauss-Newton steps are what makes them exact (without: 2.7 % exact, 34 % within 1 m)
+    bare, _ = solve_poses(dem, np.array(uvs), np.array(world), 2.0, K.f_px, K.cx, K.cy, gn_iterations=0)
+    assert np.mean(np.hypot(*(bare[:, :2] - truth[:, :2]).T) < 1.0) < 0.5
     # one at a time gives the same as the batch
     one, r1 = solve_poses(dem, np.array(uvs[:1]), np.array(world[:1]), 2.0, K.f_px, K.cx, K.cy)
     np.testing.assert_allclose(one[0], poses[0])
@@ -187,10 +194,11 @@ def test_trusted_score_counts_far_columns_and_charges_the_rest():
 def test_refinement_recovers_offset_poses(scene, views):
     """From 72 m and ~0.5 deg off, refinement reaches the skyline's noise floor.
 
-    Thresholds: these views look 10-15 km out, where 50 m of camera position moves
-    the re-oriented skyline by < 0.1 px; so the score (mean px) must fall below
-    0.1 px, the position within 60 m, the angles within 0.25 deg, and where the
-    skyline does pin the position (at least one view) within 3 m.
+    These views look 10-15 km out, where 50 m of camera position moves the re-oriented
+    skyline by < 0.1 px. Measured: 52.7, 12.3, 2.4 and 2.5 m, angles within 0.19 deg,
+    scores 0.006-0.078 px. Asserted with a margin: scores below 0.1 px, angles within
+    0.22 deg, every view closer than it started, the median within 10 m and where the
+    skyline does pin the position (two views) within 3 m.
     """
     dem, terrain, model = scene
     errors = []
@@ -203,8 +211,9 @@ def test_refinement_recovers_offset_poses(scene, views):
         r = refine_pose(terrain, start, K, 2.0, sky, np.ones(640))
         errors.append(np.hypot(*(r.pose[:2] - truth.array()[:2])))
         assert r.score < 0.1 and r.agreement > 0.98
-        assert np.abs((r.pose[3:] - truth.array()[3:] + 180) % 360 - 180).max() < 0.25
-    assert max(errors) < 60.0 and min(errors) < 3.0
+        assert np.abs((r.pose[3:] - truth.array()[3:] + 180) % 360 - 180).max() < 0.22
+    errors = np.sort(errors)
+    assert errors[-1] < 58.0 and np.median(errors) < 10.0 and errors[1] < 3.0
 
 
 def test_resection_sweep_finds_the_camera_from_three_point_poses_hundreds_of_metres_off(scene, views):

@@ -86,6 +86,8 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
             if result.localized:
                 row["error_m"] = float(position_errors(result.pose, np.array([tx, ty]))[0])
                 row["fov"] = result.fov
+                row["pose"] = [float(v) for v in result.pose]
+                row["height_m"] = float(result.pose[2] - dem.ground(result.pose[0], result.pose[1]))
             rows.append(row)
             if progress:
                 err = f"{row['error_m']:.0f} m" if "error_m" in row else "-"

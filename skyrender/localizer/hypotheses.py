@@ -29,8 +29,6 @@ from ..model.neighbours import k_nearest_features, most_covisible_features
 PERMUTATIONS = np.array(list(permutations(range(3))), dtype=np.int64)  # (6, 3)
 #: How an anchor's partners in a model triple are chosen (:func:`model_triples`).
 NEIGHBOURS = ("covisible", "nearest")
-#: Added to the log probability of triples holding a feature named by a prior.
-PRIOR_BOOST = 1000.0
 
 
 @dataclass(frozen=True)
@@ -117,19 +115,20 @@ def model_triples(model: Model, neighbours: str = "nearest", k: int | None = Non
 
 def generate_hypotheses(peak_u: np.ndarray, peak_size: np.ndarray, model: Model,
                         prior: np.ndarray | None = None, ordered: bool = True, seed: int = 0,
-                        neighbours: str = "nearest", k: int | None = None) -> Hypotheses:
+                        neighbours: str = "nearest", k: int | None = None,
+                        prior_boost: float = 1000.0) -> Hypotheses:
     """Every (image triple x model triple x assignment), most probable first.
 
     prior : optional (F,) bool, the feature points a prior says are in view: triples
-        holding one come first (the prior named peak may still not be among the
-        photo's largest skyline peaks, so the others follow).
+        holding one come first (their log-probability raised by ``prior_boost``; the prior
+        named peak may still not be among the photo's largest skyline peaks, so the others follow).
     ``ordered=False`` gives the same set in a seeded arbitrary order (the
     baseline without the probabilistic ordering).
     """
     itri, log_w = image_triples(peak_u, peak_size)
     mtri, log_m = model_triples(model, neighbours, k)
     if prior is not None:
-        log_m = log_m + PRIOR_BOOST * np.asarray(prior, bool)[mtri].any(axis=1)
+        log_m = log_m + prior_boost * np.asarray(prior, bool)[mtri].any(axis=1)
     T, M, A = len(itri), len(mtri), len(PERMUTATIONS)
     if T == 0 or M == 0:
         return Hypotheses(np.zeros((0, 3), np.int64), np.zeros((0, 3), np.int64), np.zeros(0))

@@ -43,7 +43,7 @@ from .constraints import in_image_geometry, interfeature_visibility, prior_in_vi
 from .horizon_search import HorizonSearchParams, horizon_poses
 from .hypotheses import Hypotheses, generate_hypotheses
 from .pose_solver import solve_poses
-from .refinement import Refined, refine_pose
+from .refinement import Refined, RefineParams, refine_pose
 from .verification import ScoreParams, verify_poses
 
 #: Focal lengths tried when the field of view is unknown (horizontal fov, degrees).
@@ -84,6 +84,8 @@ class LocalizeParams:
     max_peak_aspect: float = 1.5  # steeper skyline peaks are trees or posts in front, not mountains
     peak_smooth_px: float = 3.0  # skyline smoothing before peak finding (2 px let sub-pixel changes reorder the peaks)
     residual_px: float = 2.0  # reprojection cut-off of the three-point fit
+    gn_iterations: int = 5  # Gauss-Newton steps of the three-point position after the closed form
+    prior_boost: float = 1000.0  # added to the log probability of model triples holding a prior's feature
     limit_tol_px: float = 5.0  # "skyline is the limit" tolerance (plus f * 150 m / distance)
     chunk: int = 50_000  # hypotheses solved per batch
     max_hypotheses: int = 1_200_000  # then abstain (on 50 rendered views the first right one came by 1.1 M but once)
@@ -110,6 +112,7 @@ class LocalizeParams:
     horizon_fov_step: tuple = (5.0, 2.5, 1.25)  # unknown fov: probes around the best fov of the far-horizon search
     refine_fov: bool = False  # a given fov is only a start (e.g. from EXIF): refinement fits the focal length too
     score: ScoreParams = field(default_factory=ScoreParams)
+    refine: RefineParams = field(default_factory=RefineParams)  # the refinement's search set-up
 
     @classmethod
     def for_photos(cls) -> "LocalizeParams":
@@ -362,7 +365,7 @@ def _three_point_hypotheses(search: _Search, peak_sizes: np.ndarray) -> Hypothes
     hyps = Hypotheses(np.zeros((0, 3), np.int64), np.zeros((0, 3), np.int64), np.zeros(0))
     if len(search.peak_uv) >= 3 and params.max_hypotheses > 0:
         hyps = generate_hypotheses(search.peak_uv[:, 0], peak_sizes, search.model, search.in_view, params.ordered,
-                                   neighbours=params.neighbours, k=params.neighbours_k)
+                                   neighbours=params.neighbours, k=params.neighbours_k, prior_boost=params.prior_boost)
         hyps = hyps.take(slice(0, params.max_hypotheses))
     search.stats.generated = len(hyps) * len(search.fovs)
     return hyps
@@ -414,7 +417,8 @@ def _screen_chunk(search: _Search, chunk: Hypotheses, fov_i: float) -> None:
     k_i = search.intrinsics(fov_i)
     with stats.timed("pose_solver"):
         poses, residual = solve_poses(search.model.dem, search.peak_uv[chunk.image], features[chunk.features],
-                                      search.height, k_i.f_px, k_i.cx, k_i.cy, search.curvature)
+                                      search.height, k_i.f_px, k_i.cx, k_i.cy, search.curvature,
+                                      gn_iterations=params.gn_iterations)
         stats.evaluated += len(chunk)
     with stats.timed("constraints"):
         keep = residual <= params.residual_px
@@ -572,5 +576,5 @@ def _refine(cand: _Candidate, search: _Search) -> None:
     params = search.params
     cand.refined = refine_pose(search.terrain, cand.pose, search.intrinsics(search.fovs[0]), search.height, search.sky,
                                search.weights, fit_focal=search.fit_focal, f_px=cand.f_px, points=cand.points,
-                               params=params.score, give_up_px=params.give_up_sweep_px)
+                               params=params.score, give_up_px=params.give_up_sweep_px, refine=params.refine)
     search.stats.refined += 1

@@ -27,9 +27,8 @@ import numpy as np
 from ..camera import curvature_coeff
 from ..dem import DEM
 
-#: Closed-form rounds with the elevation correction, then Gauss–Newton steps.
+#: Closed-form rounds with the elevation correction (then ``gn_iterations`` Gauss–Newton steps).
 RESECTION_ROUNDS = 2
-GN_ITERATIONS = 5
 #: Finite-difference step (m) for the position Jacobian.
 FD_STEP_M = 1.0
 
@@ -152,7 +151,7 @@ def _angles_and_jacobian(dem: DEM, xy: np.ndarray, world: np.ndarray, height: fl
 
 
 def refine_positions(dem: DEM, xy: np.ndarray, world: np.ndarray, measured: np.ndarray, height: float,
-                     c: float, iterations: int = GN_ITERATIONS) -> np.ndarray:
+                     c: float, iterations: int = 5) -> np.ndarray:
     """Gauss–Newton on (x, y): match the three inter-bearing angles, z = g + height.
 
     xy : (N, 2) start; world : (N, 3, 3) points; measured : (N, 3) angles (rad).
@@ -246,7 +245,7 @@ def poses_at(centres: np.ndarray, world: np.ndarray, bearings: np.ndarray,
 
 
 def solve_poses(dem: DEM, image_uv: np.ndarray, world: np.ndarray, height: float, f_px, cx: float, cy: float,
-                curvature: bool = True) -> tuple[np.ndarray, np.ndarray]:
+                curvature: bool = True, gn_iterations: int = 5) -> tuple[np.ndarray, np.ndarray]:
     """Camera poses from three correspondences each, all hypotheses at once.
 
     Parameters
@@ -256,6 +255,7 @@ def solve_poses(dem: DEM, image_uv: np.ndarray, world: np.ndarray, height: float
     world : (N, 3, 3) the matched world points (m).
     height : camera height above ground (m).
     f_px : focal length (px), scalar or (N,); cx, cy : principal point (px).
+    gn_iterations : Gauss–Newton steps on the position after the closed form.
 
     Returns
     -------
@@ -284,7 +284,7 @@ def solve_poses(dem: DEM, image_uv: np.ndarray, world: np.ndarray, height: float
         flat = horizontal_angles(measured, np.arcsin(np.clip(dirs[..., 2], -1.0, 1.0)))
         xy = np.where(np.isfinite(flat).all(axis=1, keepdims=True),
                       resection_2d(world[:, :, :2], flat[:, 0], flat[:, 1]), xy)
-    xy = refine_positions(dem, xy, world, measured, height, c)
+    xy = refine_positions(dem, xy, world, measured, height, c, gn_iterations)
     centres = camera_centres(dem, xy, height)
     ok = np.zeros(N, dtype=bool)
     ok[keep] = np.all(np.isfinite(centres), axis=1)

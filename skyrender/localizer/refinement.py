@@ -31,6 +31,7 @@ from .verification import SHIFTS_PX, ScoreParams, align_skylines, column_errors,
 STEP_XY_M = 2.0
 STEP_DEG = 0.01
 STEP_F_REL = 1e-3
+STEP_H_M = 1.0
 #: Bisection tolerance (px) of the renders inside the fit: well below the steps' effect.
 FIT_TOL_PX = 0.01
 
@@ -46,34 +47,45 @@ class Refined:
     evaluations: int
 
 
-#: Local search levels: half-widths (m) along and across the line of sight, and grid
-#: points (along x across). Without matched points the first (wide) level finds the area.
-SEARCH_LEVELS = ((640.0, 160.0, 65, 9), (40.0, 40.0, 5, 5), (12.0, 12.0, 5, 5), (3.0, 3.0, 5, 5), (1.0, 1.0, 5, 5),
-                 (0.3, 0.3, 5, 5))  # the last two: a camera at a crest's edge sees its foreground change per metre
-SEARCH_BEAM = 3
-#: Horizontal shifts (px) tried by the alignment after the first level: that level's
-#: alignment has corrected the orientation, what remains is a pixel or two.
-FINE_SHIFTS_PX = np.arange(-4.0, 4.01, 1.0)
-#: At most this many positions per seed and level are rendered (evenly thinned).
-SEARCH_MAX_POSES = 200
-#: Resection sweep (with matched points): positions over the three-point position's
-#: uncertainty ellipse (:func:`position_uncertainty`, apex noise APEX_NOISE_PX) out to
-#: SWEEP_SIGMAS, half-widths clipped to SWEEP_HALF_WIDTH_M, SWEEP_SPACING_M apart (coarser
-#: when the ellipse would need more than SWEEP_MAX_POSES), each turned to its three
-#: points and rendered on every SWEEP_STRIDE-th column without alignment.
-APEX_NOISE_PX = 2.0
-SWEEP_SIGMAS = 2.5
-SWEEP_HALF_WIDTH_M = (30.0, 1200.0)
-SWEEP_SPACING_M = 10.0
-SWEEP_MAX_POSES = 6000
-SWEEP_STRIDE = 8
+@dataclass(frozen=True)
+class RefineParams:
+    """The refinement's search set-up (:func:`refine_pose`); every field settable from an experiment.
+
+    Local search: ``search_levels`` are half-widths (m) along and across the line of sight and
+    grid points (along x across); without matched points the first (wide) level finds the area,
+    the last two serve a camera at a crest's edge, whose foreground changes per metre.
+    ``fine_shift_px``: horizontal shifts (+-, 1 px steps) tried by the alignment after the first
+    level (that level's alignment has corrected the orientation; a pixel or two remain).
+    Resection sweep (with matched points): positions over the three-point position's
+    uncertainty ellipse (:func:`position_uncertainty`, apex noise ``apex_noise_px``) out to
+    ``sweep_sigmas``, half-widths clipped to ``sweep_half_width_m``, ``sweep_spacing_m`` apart
+    (coarser when the ellipse would need more than ``sweep_max_poses``), each turned to its
+    three points and rendered on every ``sweep_stride``-th column without alignment.
+    """
+
+    search_levels: tuple = ((640.0, 160.0, 65, 9), (40.0, 40.0, 5, 5), (12.0, 12.0, 5, 5), (3.0, 3.0, 5, 5),
+                            (1.0, 1.0, 5, 5), (0.3, 0.3, 5, 5))
+    search_beam: int = 3  # best positions of each level kept as the next level's seeds
+    search_max_poses: int = 200  # at most this many positions per seed and level are rendered (evenly thinned)
+    fine_shift_px: float = 4.0
+    apex_noise_px: float = 2.0
+    sweep_sigmas: float = 2.5
+    sweep_half_width_m: tuple = (30.0, 1200.0)
+    sweep_spacing_m: float = 10.0
+    sweep_max_poses: int = 6000
+    sweep_stride: int = 8
+    max_nfev: int = 30  # least-squares evaluations per stage
+    # the last least-squares stage also fits the camera height within [0, height + this] m
+    # (0: fixed). Real photos: the height above the DEM's surface is unknown on a slope (SRTM's
+    # 90 m cells), and the oracle fit at the true positions found 0-29 m (``make oracle``)
+    fit_height_m: float = 0.0
 
 
 def resection_sweep(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, height: float,
                     image_skyline: np.ndarray, weights: np.ndarray, f_px: float, points: np.ndarray,
-                    beam: int = SEARCH_BEAM,
-                    params: ScoreParams = ScoreParams()) -> tuple[list[np.ndarray], float, float, int]:
-    """The ``beam`` best positions (at least one grid step apart) over the uncertainty
+                    params: ScoreParams = ScoreParams(),
+                    refine: RefineParams = RefineParams()) -> tuple[list[np.ndarray], float, float, int]:
+    """The ``refine.search_beam`` best positions (at least one grid step apart) over the uncertainty
     ellipse of a three-point pose, each turned to show its three points where ``pose``
     shows them.
 
@@ -89,11 +101,11 @@ def resection_sweep(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, 
     k_full = replace(intrinsics, f_px=f_px)
     uv, _ = project(points, pose[None], k_full, terrain.curvature)
     bearings = image_bearings(uv[0], f_px, intrinsics.cx, intrinsics.cy)
-    axes, sigma = position_uncertainty(dem, np.asarray(pose[:2], np.float64), points, height, c, APEX_NOISE_PX / f_px)
+    axes, sigma = position_uncertainty(dem, np.asarray(pose[:2], np.float64), points, height, c, refine.apex_noise_px / f_px)
     if not (np.all(np.isfinite(sigma)) and np.all(np.isfinite(bearings))):
-        return [pose], np.nan, SWEEP_SPACING_M, 0
-    half = np.clip(SWEEP_SIGMAS * sigma, *SWEEP_HALF_WIDTH_M)
-    spacing = max(SWEEP_SPACING_M, float(np.sqrt(4 * half[0] * half[1] / SWEEP_MAX_POSES)))
+        return [pose], np.nan, refine.sweep_spacing_m, 0
+    half = np.clip(refine.sweep_sigmas * sigma, *refine.sweep_half_width_m)
+    spacing = max(refine.sweep_spacing_m, float(np.sqrt(4 * half[0] * half[1] / refine.sweep_max_poses)))
     n = np.maximum(3, np.ceil(2 * half / spacing).astype(int) + 1)
     gw, gs = np.meshgrid(np.linspace(-half[0], half[0], n[0]), np.linspace(-half[1], half[1], n[1]))
     xy = pose[:2] + gw.reshape(-1, 1) * axes[:, 0] + gs.reshape(-1, 1) * axes[:, 1]
@@ -106,9 +118,9 @@ def resection_sweep(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, 
         return [pose], np.nan, spacing, 0
     n_pos = len(centres)
     poses, _, _ = poses_at(centres, np.broadcast_to(points, (n_pos, 3, 3)), np.broadcast_to(bearings, (n_pos, 3, 3)), c)
-    rendered, cols = strided_skylines(terrain, poses, k_full, SWEEP_STRIDE, tol_px=0.25)
+    rendered, cols = strided_skylines(terrain, poses, k_full, refine.sweep_stride, tol_px=0.25)
     score, _ = score_skylines(rendered, image_skyline[cols], weights[cols], params)
-    return best_apart(poses, score, beam, spacing), float(score.min()), spacing, n_pos
+    return best_apart(poses, score, refine.search_beam, spacing), float(score.min()), spacing, n_pos
 
 
 def best_apart(poses: np.ndarray, score: np.ndarray, beam: int, spacing: float) -> list[np.ndarray]:
@@ -138,12 +150,13 @@ def _box_offsets(pose: np.ndarray, along_m: float, across_m: float, n_along: int
 
 def local_search(terrain: Terrain, seeds: list[np.ndarray], intrinsics: Intrinsics, height: float,
                  image_skyline: np.ndarray, weights: np.ndarray, f_px: float, stride: int = 2,
-                 points: np.ndarray | None = None, beam: int = SEARCH_BEAM, params: ScoreParams = ScoreParams(),
-                 widest_m: float = np.inf, give_up_px: float = np.inf) -> tuple[np.ndarray, int, bool]:
+                 points: np.ndarray | None = None, params: ScoreParams = ScoreParams(),
+                 widest_m: float = np.inf, give_up_px: float = np.inf,
+                 refine: RefineParams = RefineParams()) -> tuple[np.ndarray, int, bool]:
     """Coarse-to-fine grid search over (x, y) around ``seeds`` (poses (6,)), elongated
     along the line of sight, with the orientation re-aligned per position
-    (:func:`align_skylines`); levels of ``SEARCH_LEVELS`` no wider than ``widest_m``.
-    The ``beam`` best positions of each level (at least a grid step apart) seed the
+    (:func:`align_skylines`); levels of ``refine.search_levels`` no wider than ``widest_m``.
+    The ``refine.search_beam`` best positions of each level (at least a grid step apart) seed the
     next: the score is flat along the line of sight and one seed can fall into the
     wrong dip. ``points`` (n, 3): the hypothesis' matched feature points; positions
     from which one of them is hidden are not rendered (a camera 2 m up sees its peaks
@@ -153,7 +166,8 @@ def local_search(terrain: Terrain, seeds: list[np.ndarray], intrinsics: Intrinsi
     dem = terrain.dem
     k_full = replace(intrinsics, f_px=f_px)
     seeds, renders = [np.asarray(seed, np.float64).copy() for seed in seeds], 0
-    levels = [lv for lv in SEARCH_LEVELS if lv[0] <= widest_m]
+    levels = [lv for lv in refine.search_levels if lv[0] <= widest_m]
+    fine_shifts = np.arange(-refine.fine_shift_px, refine.fine_shift_px + 0.01, 1.0)
     for n_level, level in enumerate(levels):
         grids = []
         for seed in seeds:
@@ -162,8 +176,8 @@ def local_search(terrain: Terrain, seeds: list[np.ndarray], intrinsics: Intrinsi
             grid = grid[np.isfinite(grid[:, 2])]
             if points is not None and len(grid):
                 grid = grid[_sees_all(terrain, grid[:, :3], points)]
-            if len(grid) > SEARCH_MAX_POSES:
-                grid = grid[np.linspace(0, len(grid) - 1, SEARCH_MAX_POSES).astype(np.int64)]
+            if len(grid) > refine.search_max_poses:
+                grid = grid[np.linspace(0, len(grid) - 1, refine.search_max_poses).astype(np.int64)]
             grids.append(grid)
         poses = np.concatenate(grids)
         if len(poses) == 0:
@@ -171,13 +185,13 @@ def local_search(terrain: Terrain, seeds: list[np.ndarray], intrinsics: Intrinsi
         rendered, cols = strided_skylines(terrain, poses, k_full, stride, tol_px=0.1)
         renders += len(poses)
         score, _, a, b, c = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols],
-                                           shifts=SHIFTS_PX if n_level == 0 else FINE_SHIFTS_PX, params=params)
+                                           shifts=SHIFTS_PX if n_level == 0 else fine_shifts, params=params)
         # the skyline moved right by a px = pan left by a / f; down by b = tilt up; slope c = swing -c
         poses[:, 3] = (poses[:, 3] - np.degrees(np.arctan(a / f_px))) % 360.0
         poses[:, 4] = poses[:, 4] + np.degrees(np.arctan(b / f_px))
         poses[:, 5] = poses[:, 5] - np.degrees(np.arctan(c))
         spacing = min(2 * level[1] / max(level[3] - 1, 1), 2 * level[0] / max(level[2] - 1, 1))
-        seeds = best_apart(poses, score, beam, spacing)
+        seeds = best_apart(poses, score, refine.search_beam, spacing)
         if n_level == 0 and score.min() > give_up_px:
             return seeds[0], renders, True
     return seeds[0], renders, False
@@ -185,9 +199,9 @@ def local_search(terrain: Terrain, seeds: list[np.ndarray], intrinsics: Intrinsi
 
 def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, height: float,
                 image_skyline: np.ndarray, weights: np.ndarray, *, fit_focal: bool = False,
-                f_px: float | None = None, max_nfev: int = 30,
-                points: np.ndarray | None = None, params: ScoreParams = ScoreParams(),
-                give_up_px: float = np.inf) -> Refined:
+                f_px: float | None = None, points: np.ndarray | None = None,
+                params: ScoreParams = ScoreParams(), give_up_px: float = np.inf,
+                refine: RefineParams = RefineParams()) -> Refined:
     """Refine one pose (6,) against the photo's skyline (W,): resection sweep (with
     three matched ``points``), local search, then least squares. When the sweep's best
     score exceeds ``give_up_px`` the candidate is wrong (on the benchmark views right
@@ -199,22 +213,24 @@ def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, heig
     seeds, renders, widest, swept = [start], 0, np.inf, np.nan
     if points is not None and len(points) == 3:
         seeds, swept, spacing, renders = resection_sweep(terrain, start, intrinsics, height, image_skyline, weights,
-                                                         f0, points, params=params)
+                                                         f0, points, params=params, refine=refine)
         widest = 2 * spacing
-    stages = [np.r_[start[0], start[1], start[3], start[4], start[5], f0]]
+    stages = [np.r_[start[0], start[1], start[3], start[4], start[5], f0, height]]
     if swept > give_up_px:
-        stages.append(np.r_[seeds[0][[0, 1, 3, 4, 5]], f0])
+        stages.append(np.r_[seeds[0][[0, 1, 3, 4, 5]], f0, height])
         return _best_stage(terrain, stages, height, intrinsics, image_skyline, weights, params, renders, seeds[0])
     pose, n, gave_up = local_search(terrain, seeds, intrinsics, height, image_skyline, weights, f0, points=points,
                                     params=params, widest_m=widest,
-                                    give_up_px=give_up_px if points is None else np.inf)
+                                    give_up_px=give_up_px if points is None else np.inf, refine=refine)
     renders += n
-    q = np.r_[pose[0], pose[1], pose[3], pose[4], pose[5], f0]
+    q = np.r_[pose[0], pose[1], pose[3], pose[4], pose[5], f0, height]
     stages.append(q)
     if gave_up:
         return _best_stage(terrain, stages, height, intrinsics, image_skyline, weights, params, renders, pose)
-    for free in ([2, 3, 4], [0, 1, 2, 3, 4] + ([5] if fit_focal else [])):
-        q, n = _least_squares(terrain, q, free, intrinsics, height, image_skyline, weights, max_nfev, params)
+    last = [0, 1, 2, 3, 4] + ([5] if fit_focal else []) + ([6] if refine.fit_height_m > 0 else [])
+    for free in ([2, 3, 4], last):
+        q, n = _least_squares(terrain, q, free, intrinsics, image_skyline, weights, refine.max_nfev, params,
+                              max_height=height + refine.fit_height_m)
         stages.append(q)
         renders += n
     return _best_stage(terrain, stages, height, intrinsics, image_skyline, weights, params, renders, pose)
@@ -223,10 +239,10 @@ def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, heig
 def _best_stage(terrain: Terrain, stages: list[np.ndarray], height: float, intrinsics: Intrinsics,
                 image_skyline: np.ndarray, weights: np.ndarray, params: ScoreParams, renders: int,
                 fallback: np.ndarray) -> Refined:
-    """The best of the refinement's stages (rows x, y, pan, tilt, swing, f), the start
+    """The best of the refinement's stages (rows x, y, pan, tilt, swing, f, h), the start
     included: a run on a rough score surface can end worse than it began."""
     f0 = stages[0][5]
-    poses, k = _pose_of(terrain.dem, np.array(stages), height, intrinsics)
+    poses, k = _pose_of(terrain.dem, np.array(stages), intrinsics)
     inside = np.isfinite(poses[:, 2])
     if not inside.any():
         return Refined(fallback, f0, np.inf, 0.0, renders)
@@ -238,19 +254,24 @@ def _best_stage(terrain: Terrain, stages: list[np.ndarray], height: float, intri
     return Refined(final, float(k[inside][j, 0]), float(score[j]), float(agreement[j]), renders)
 
 
-def _pose_of(dem, qs: np.ndarray, height: float, intrinsics: Intrinsics) -> tuple[np.ndarray, np.ndarray]:
-    """Poses (P, 6) and per-pose intrinsics (P, 3) of parameter rows (x, y, pan, tilt, swing, f)."""
-    poses = np.column_stack([camera_centres(dem, qs[:, :2], height), qs[:, 2:5]])
+def _pose_of(dem, qs: np.ndarray, intrinsics: Intrinsics) -> tuple[np.ndarray, np.ndarray]:
+    """Poses (P, 6) and per-pose intrinsics (P, 3) of parameter rows (x, y, pan, tilt, swing, f,
+    h = camera height above ground, m)."""
+    poses = np.column_stack([camera_centres(dem, qs[:, :2], 0.0), qs[:, 2:5]])
+    poses[:, 2] += qs[:, 6]
     return poses, np.column_stack([qs[:, 5], np.full(len(qs), intrinsics.cx), np.full(len(qs), intrinsics.cy)])
 
 
-def _least_squares(terrain: Terrain, q0: np.ndarray, free: list[int], intrinsics: Intrinsics, height: float,
+def _least_squares(terrain: Terrain, q0: np.ndarray, free: list[int], intrinsics: Intrinsics,
                    image_skyline: np.ndarray, weights: np.ndarray, max_nfev: int,
-                   params: ScoreParams) -> tuple[np.ndarray, int]:
-    """least_squares over the ``free`` entries of q = (x, y, pan, tilt, swing, f)."""
+                   params: ScoreParams, max_height: float = np.inf) -> tuple[np.ndarray, int]:
+    """least_squares over the ``free`` entries of q = (x, y, pan, tilt, swing, f, h); a free
+    height h stays within [0, ``max_height``] m."""
     sqrt_w = np.sqrt(np.asarray(weights, np.float64))
-    all_steps = np.r_[STEP_XY_M, STEP_XY_M, STEP_DEG, STEP_DEG, STEP_DEG, STEP_F_REL * q0[5]]
+    all_steps = np.r_[STEP_XY_M, STEP_XY_M, STEP_DEG, STEP_DEG, STEP_DEG, STEP_F_REL * q0[5], STEP_H_M]
     steps = all_steps[free]
+    lower = np.where(np.array(free) == 6, 0.0, -np.inf)
+    upper = np.where(np.array(free) == 6, max(max_height, q0[6] + 1e-6), np.inf)
     counter = [0]
 
     def full(p: np.ndarray) -> np.ndarray:
@@ -259,7 +280,7 @@ def _least_squares(terrain: Terrain, q0: np.ndarray, free: list[int], intrinsics
         return qs
 
     def residuals_of(p: np.ndarray) -> np.ndarray:
-        poses, k = _pose_of(terrain.dem, full(p), height, intrinsics)
+        poses, k = _pose_of(terrain.dem, full(p), intrinsics)
         inside = np.isfinite(poses[:, 2])
         out = np.full((len(p), intrinsics.width), -params.cap_px)
         if inside.any():
@@ -285,5 +306,5 @@ def _least_squares(terrain: Terrain, q0: np.ndarray, free: list[int], intrinsics
         return ((rs - r0) / steps[:, None]).T
 
     result = least_squares(fun, q0[free], jac=jac, loss="soft_l1", f_scale=1.0, x_scale=steps * 5,
-                           max_nfev=max_nfev, xtol=1e-6, ftol=1e-6)
+                           max_nfev=max_nfev, xtol=1e-6, ftol=1e-6, bounds=(lower, upper))
     return full(result.x[None])[0], counter[0]

@@ -178,8 +178,11 @@ def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_ite
 
 
 def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixel: bool, n_iter: int,
-                    with_distance: bool = False, near_m: float = 0.0):
-    """The same bisection in numpy for the scalar fallback variant (slow)."""
+                    with_distance: bool = False, near_m: float = 0.0, ray_test=None):
+    """The same bisection in numpy for the scalar fallback variant (slow). ``ray_test(o, d)``
+    (mesh-space origins and unit directions -> bool hits) defaults to the terrain's own; the
+    renderer benchmark passes another ray tracer's to time it on the same work."""
+    ray_test = terrain.mesh_ray_test if ray_test is None else ray_test
     P = len(basis)
     o = np.repeat(basis[:, 0:3], W, axis=0)
     du = np.repeat(basis[:, 6:9], W, axis=0)
@@ -194,8 +197,8 @@ def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
         d = unit(v)
         if near_m > 0:
             start = o + near_m * d
-            return terrain.mesh_ray_test(start, d) | terrain.mesh_ray_test(start, np.broadcast_to([0.0, 0.0, 1.0], d.shape))
-        return terrain.mesh_ray_test(o, d)
+            return ray_test(start, d) | ray_test(start, np.broadcast_to([0.0, 0.0, 1.0], d.shape))
+        return ray_test(o, d)
 
     def with_distance_of(v, v_terrain):
         if not with_distance:
