@@ -53,6 +53,32 @@ def _fit_gmm(samples: np.ndarray, components: int, seed: int):
                                random_state=seed).fit(samples.astype(np.float64))
 
 
+def mixture_log_density(gmm, x: np.ndarray, chunk: int = 65_536) -> np.ndarray:
+    """(N,) log density of a fitted full-covariance ``GaussianMixture`` at the rows of ``x``
+    (N, D): what its ``score_samples`` gives (to 1e-14), with every component in two matrix
+    products per chunk of rows instead of a pass per component (3.5x faster on a photo)."""
+    means, chol, weights = gmm.means_, gmm.precisions_cholesky_, gmm.weights_
+    K, D = means.shape
+    stacked = chol.transpose(1, 0, 2).reshape(D, K * D)  # x @ stacked = [x @ chol_k for each k]
+    shift = np.einsum("kd,kde->ke", means, chol).reshape(K * D)
+    block_sum = np.kron(np.eye(K), np.ones((D, 1)))  # (K * D, K): sums each component's D squares
+    # per component: log |prec_chol_k| + log w_k - D/2 log(2 pi)
+    const = np.log(np.diagonal(chol, axis1=1, axis2=2)).sum(axis=1) + np.log(weights) - 0.5 * D * np.log(2 * np.pi)
+    out = np.empty(len(x))
+    for start in range(0, len(x), chunk):
+        y = x[start:start + chunk] @ stacked
+        y -= shift
+        np.square(y, out=y)
+        log_prob = y @ block_sum
+        log_prob *= -0.5
+        log_prob += const
+        top = log_prob.max(axis=1)
+        log_prob -= top[:, None]
+        np.exp(log_prob, out=log_prob)
+        out[start:start + chunk] = top + np.log(log_prob.sum(axis=1))
+    return out
+
+
 def blue_sky_logit(features: np.ndarray, weight: float = 12.0) -> np.ndarray:
     """(H, W) log-odds bonus for smooth blue pixels: clear sky is blue everywhere, so a
     blue patch between clouds is sky even when this photo's sky model learned only clouds.
@@ -155,8 +181,8 @@ def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np
     s, t = pick(sky_mask), pick(terrain_mask)
     if len(s) < 20 or len(t) < 20:  # one class absent: the prior alone decides
         return np.broadcast_to(row_prior[:, None], (H, W)).astype(np.float32)
-    ll_sky = _fit_gmm(s, components, seed).score_samples(x)
-    ll_ter = _fit_gmm(t, components, seed + 1).score_samples(x)
+    ll_sky = mixture_log_density(_fit_gmm(s, components, seed), x)
+    ll_ter = mixture_log_density(_fit_gmm(t, components, seed + 1), x)
     prior = np.clip(np.repeat(row_prior, W), 1e-3, 1 - 1e-3)
     # the mixtures' evidence saturates at +-10 so that the row and blue-sky priors still count
     logit = np.clip(ll_sky - ll_ter, -10, 10) + np.log(prior / (1 - prior)) + blue_sky_logit(features).ravel()
