@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: install demo test fuzz fit-photo-confidence bench bench-render bench-skyline bench-localize bench-real oracle train-sky-net experiment-naval2000 clean
+.PHONY: install demo test fuzz fit-photo-confidence bench bench-render bench-skyline bench-localize bench-split bench-real oracle train-sky-net experiment-naval2000 clean
 
 install: $(STAMP)
 
@@ -43,6 +43,10 @@ oracle: install
 
 bench-localize: install
 	$(BIN)/python -m skyrender.benchmarks.localizer
+
+# one localization's hypothesis search on 2 Dask workers against this process
+bench-split: install
+	$(BIN)/python -m skyrender.benchmarks.split_search --workers 2
 
 # refit the photo confidence of the localizer on 40 CH1 photos of the training side (~25 min)
 fit-photo-confidence: install

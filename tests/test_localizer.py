@@ -599,3 +599,24 @@ def test_the_same_inputs_give_byte_identical_outputs(scene, views, model_dir, tm
         docs.append(doc)
     assert docs[0] == docs[1]
     assert np.isfinite(docs[0]["x"])
+
+
+def test_split_solver_on_dask_workers_gives_the_local_poses(scene):
+    """One localization's hypothesis search spread over a Dask cluster (SplitSolver): the
+    same poses and residuals, in the same order, as the solver in this process."""
+    from skyrender.scale import SplitSolver, dask_client
+
+    dem, terrain, model = scene
+    pose = dem.camera_pose(*dem.centre, 2.0, 30.0, 1.0, 0.0)
+    uv, front = project(model.features.xyz, pose, K)
+    rng = np.random.default_rng(0)
+    picks = np.sort(rng.choice(len(uv), (2000, 3)), axis=1)
+    img = uv[picks] + rng.normal(0, 0.3, (2000, 3, 2))
+    world = model.features.xyz[picks]
+    local = solve_poses(dem, img, world, 2.0, K.f_px, K.cx, K.cy)
+    with dask_client(workers=2) as client:
+        split = SplitSolver(client, dem, parts=3)
+        spread = split(dem, img, world, 2.0, K.f_px, K.cx, K.cy)
+    assert np.isfinite(local[1]).sum() > 0
+    for a, b in zip(local, spread):
+        np.testing.assert_array_equal(a, b)

@@ -303,6 +303,7 @@ class _Search:
     stats: LocalizeStats
     curvature: bool
     candidates: list = field(default_factory=list)
+    solver: object = solve_poses  # solve_poses, or a skyrender.scale.SplitSolver spreading it over a cluster
 
     def intrinsics(self, fov: float) -> Intrinsics:
         return Intrinsics.from_fov(fov, self.width, self.img_height)
@@ -314,7 +315,7 @@ class _Search:
 
 def localize(image, model: Model, height: float, fov: float | None = None, prior=None, *,
              terrain: Terrain | None = None, skyline=None, params: LocalizeParams = LocalizeParams(),
-             curvature: bool = True) -> LocalizationResult:
+             curvature: bool = True, solver=None) -> LocalizationResult:
     """Camera pose from one photograph and a model.
 
     Parameters
@@ -329,6 +330,9 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
         in its image; hypotheses built on them are tried first.
     terrain : a Terrain of ``model.dem`` to reuse; skyline : the photo's skyline
         (an ExtractedSkyline or a (W,) array) when already extracted.
+    solver : the three-point solver (default :func:`solve_poses`); a
+        :class:`skyrender.scale.SplitSolver` spreads the hypothesis search over a Dask
+        cluster (same poses; it pays only where workers have cores of their own).
 
     Returns a :class:`LocalizationResult` (``status`` "localized" or "abstained").
     """
@@ -345,7 +349,7 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     fovs = (float(fov),) if fov is not None else tuple(params.fov_candidates)
     in_view = model.features_for_prior(**prior) if prior else None
     search = _Search(model, terrain, height, fov, fovs, sky, weights, W, H, peak_uv, segments_in_sky(peak_uv, sky), in_view,
-                     params, stats, curvature)
+                     params, stats, curvature, solver=solver or solve_poses)
     with stats.timed("hypotheses"):
         hyps = _three_point_hypotheses(search, np.array([p.size for p in peaks]))
     if params.use_horizons and len(model.horizons):
@@ -416,7 +420,7 @@ def _screen_chunk(search: _Search, chunk: Hypotheses, fov_i: float) -> None:
     params, stats, features = search.params, search.stats, search.model.features.xyz
     k_i = search.intrinsics(fov_i)
     with stats.timed("pose_solver"):
-        poses, residual = solve_poses(search.model.dem, search.peak_uv[chunk.image], features[chunk.features],
+        poses, residual = search.solver(search.model.dem, search.peak_uv[chunk.image], features[chunk.features],
                                       search.height, k_i.f_px, k_i.cx, k_i.cy, search.curvature,
                                       gn_iterations=params.gn_iterations)
         stats.evaluated += len(chunk)
