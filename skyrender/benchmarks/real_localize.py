@@ -38,6 +38,18 @@ def place_window(lat: float, lon: float) -> tuple[float, float, float, float]:
     return clon - HALF_LON, clat - HALF_LAT, clon + HALF_LON, clat + HALF_LAT
 
 
+def places_of(items) -> tuple[dict[str, str], dict[str, tuple[float, float]]]:
+    """The place of each photo (``experiments/photos/split.json``) and each place's centre
+    (lat, lon: the mean position of the given photos taken there, whose window
+    :func:`place_window` they share)."""
+    with open(os.path.join(REPO, "experiments", "photos", "split.json")) as f:
+        place_of = {k: v["place"] for k, v in json.load(f)["photos"].items()}
+    positions: dict[str, list] = {}
+    for it in items:
+        positions.setdefault(place_of[it.key], []).append((it.lat, it.lon))
+    return place_of, {place: tuple(np.mean(p, axis=0)) for place, p in positions.items()}
+
+
 def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown_every: int = 1) -> list[dict]:
     """Localize each photo (``params``: LocalizeParams, default the photo preset); rows as in
     the module doc. The fov-unknown mode runs on every ``unknown_every``-th photo only (it
@@ -49,18 +61,14 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
     from ..model import ModelParams, cached_model
     from ..render import Terrain
 
-    with open(os.path.join(REPO, "experiments", "photos", "split.json")) as f:
-        place_of = {k: v["place"] for k, v in json.load(f)["photos"].items()}
-    centres: dict[str, list] = {}
-    for it in items:
-        centres.setdefault(place_of[it.key], []).append((it.lat, it.lon))
+    place_of, centres = places_of(items)
     loaded: dict[str, tuple] = {}
     params = params or LocalizeParams.for_photos()
     rows = []
     for n, it in enumerate(items):
         place = place_of[it.key]
         if place not in loaded:
-            lat, lon = np.mean(centres[place], axis=0)
+            lat, lon = centres[place]
             window = place_window(lat, lon)
             t = time.perf_counter()
             dem = load_dem(tiles_around(lat, lon, DEM_DIR), bounds=window)
@@ -148,11 +156,16 @@ def table(report: dict) -> str:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--side", default="validation", choices=["train", "validation"])
+    parser.add_argument("--side", default="validation", choices=["train", "dev", "validation"])
     parser.add_argument("--limit", type=int, default=0, help="at most N photos, spread over the side's places")
     parser.add_argument("--fov", nargs="+", default=["known", "unknown"], choices=["known", "unknown"])
     parser.add_argument("--unknown-every", type=int, default=1, help="the fov-unknown mode on every K-th photo only")
     parser.add_argument("--out", default=os.path.join(REPO, "experiments", "ch1"))
+    parser.add_argument("--photos", nargs="+", default=None, help="these photos of the side only (keys, e.g. ch1/IMG_4922_01024)")
+    parser.add_argument("--set", default=None, metavar="JSON",
+                        help='overrides of the photo preset, e.g. \'{"refine": {"fit_height_m": 50}}\' (a probe)')
+    parser.add_argument("--no-abstain", action="store_true", help="min_confidence 0: every photo answered")
+    parser.add_argument("--tag", default="", help="output files bench-real-<side>-<tag>.*")
     parser.add_argument("--retable", action="store_true", help="rewrite the text table from the run's JSON")
     parser.add_argument("--rescore", action="store_true", help="with --retable: apply the current photo confidence "
                         "fit and threshold to the run's rows (their poses do not depend on it)")
@@ -161,10 +174,24 @@ def main(argv=None) -> int:
         print(f"no photos at {DEFAULT_PHOTOS}")
         return 2
     items = [it for it in items_on_side(args.side) if it.key.startswith("ch1/")]
+    if args.photos:
+        items = [it for it in items if it.key in set(args.photos)]
     if args.limit:
         items = items[:: max(1, len(items) // args.limit)][: args.limit]
+    from ..localizer import LocalizeParams
+
+    params = LocalizeParams.for_photos()
+    if args.set:
+        try:
+            params = LocalizeParams.from_dict(json.loads(args.set), params)
+        except ValueError as exc:
+            print(f"--set: {exc}")
+            return 2
+    if args.no_abstain:
+        params = LocalizeParams.from_dict({"min_confidence": 0.0}, params)
+    name = f"bench-real-{args.side}{'-' + args.tag if args.tag else ''}"
     if args.retable:  # rewrite the text table of a finished run from its JSON
-        with open(os.path.join(args.out, f"bench-real-{args.side}.json")) as f:
+        with open(os.path.join(args.out, f"{name}.json")) as f:
             report = json.load(f)
         if args.rescore:
             from ..localizer.pipeline import PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE
@@ -173,16 +200,20 @@ def main(argv=None) -> int:
             report["rescored"] = {"at": git_commit(), "logit": list(PHOTO_MARGIN_LOGIT),
                                   "min_confidence": PHOTO_MIN_CONFIDENCE}
     else:
-        rows = run(items, args.fov, unknown_every=max(1, args.unknown_every))
+        rows = run(items, args.fov, params=params, unknown_every=max(1, args.unknown_every))
         report = {"commit": git_commit(), "cpus": os.cpu_count(), "side": args.side, "photos": rows}
+        if args.set or args.no_abstain:
+            report["overrides"] = {"set": json.loads(args.set) if args.set else None, "no_abstain": args.no_abstain}
     report["summary"] = {m: summary([r for r in report["photos"] if r["fov_mode"] == m]) for m in args.fov}
     text = table(report)
     print(text)
     os.makedirs(args.out, exist_ok=True)
-    with open(os.path.join(args.out, f"bench-real-{args.side}.json"), "w") as f:
+    with open(os.path.join(args.out, f"{name}.json"), "w") as f:
         json.dump(report, f, indent=1)
-    with open(os.path.join(args.out, f"bench-real-{args.side}.txt"), "w") as f:
+    with open(os.path.join(args.out, f"{name}.txt"), "w") as f:
         head = f"commit {report['commit']}, {report['cpus']} CPUs, side {args.side}"
+        if "overrides" in report:
+            head += f"; photo preset with {json.dumps(report['overrides'])}"
         if "rescored" in report:
             rs = report["rescored"]
             head += (f"; confidences rescored at {rs['at']} (logit {rs['logit'][0]:.3f} + {rs['logit'][1]:.3f} m, "

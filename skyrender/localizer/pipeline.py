@@ -92,6 +92,7 @@ class LocalizeParams:
     neighbours: str = "nearest"  # model triples: an anchor's k nearest (the paper's) or "covisible" features
     neighbours_k: int | None = None  # ... this many of them (None: the model's k)
     verify_stride: int = 4  # every n-th column in the verification renders
+    confidence_power: float = 1.0  # column weights = the skyline's per-column confidence (>= 0.05) to this power
     refine_per_chunk: int = 1  # best new candidates (by each score) refined after each chunk
     final_refinements: int = 3  # distinct candidates refined at the end
     max_refinements: int = 16  # refinements of three-point candidates in all (each ~0.3 s)...
@@ -228,9 +229,17 @@ class _Candidate:
     refined: Refined | None = None
 
 
-def _image_skyline(image, skyline, method: str = "gmm") -> tuple[np.ndarray, np.ndarray, int, int]:
+def column_weights(confidence: np.ndarray, power: float = 1.0) -> np.ndarray:
+    """(W,) weights of the skyline's columns in every match (far-horizon search,
+    verification, refinement): the extractor's per-column confidence, at least 0.05, raised
+    to ``power`` (a higher power discounts doubtful columns more)."""
+    return np.clip(np.asarray(confidence, np.float64), 0.05, 1.0) ** power
+
+
+def _image_skyline(image, skyline, method: str = "gmm", power: float = 1.0) -> tuple[np.ndarray, np.ndarray, int, int]:
     """(skyline, weights, W, H) from a photo (path or array) or a given skyline; ``method``:
-    the extractor (:class:`~skyrender.features.skyline.SkylineParams`) when none is given."""
+    the extractor (:class:`~skyrender.features.skyline.SkylineParams`) when none is given;
+    ``power``: of the confidence in the column weights (:func:`column_weights`)."""
     if isinstance(image, (str, bytes)) or hasattr(image, "__fspath__"):
         image = load_photo(image)
     image = np.asarray(image)
@@ -240,7 +249,7 @@ def _image_skyline(image, skyline, method: str = "gmm") -> tuple[np.ndarray, np.
     if skyline is None:
         skyline = extract_skyline(image, SkylineParams(method=method))
     if isinstance(skyline, ExtractedSkyline):
-        return skyline.skyline.astype(np.float64), np.clip(skyline.confidence, 0.05, 1.0), W, H
+        return skyline.skyline.astype(np.float64), column_weights(skyline.confidence, power), W, H
     sky = np.asarray(skyline, np.float64)
     if sky.shape != (W,):
         raise InputError(f"the skyline has {sky.size} values but the image is {W} columns wide")
@@ -341,7 +350,7 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     t_start = time.perf_counter()
     stats = LocalizeStats()
     with stats.timed("image_features"):
-        sky, weights, W, H = _image_skyline(image, skyline, params.skyline_method)
+        sky, weights, W, H = _image_skyline(image, skyline, params.skyline_method, params.confidence_power)
         peaks = image_peaks(sky, params)
     with stats.timed("terrain"):
         terrain = terrain if terrain is not None else Terrain(model.dem, curvature=curvature)

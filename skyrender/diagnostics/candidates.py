@@ -1,0 +1,142 @@
+"""Where the real-photo localizer loses the truth: the far-horizon search's recall.
+
+``python -m skyrender.diagnostics.candidates [--side train] [--limit N] [--true-skyline]``
+
+For each CH1 photo of a side (the training side by default: never the validation side
+for development), with its focal length known, against the SRTM mosaic of its place
+(:func:`skyrender.benchmarks.real_localize.place_window`, the photo preset's model):
+
+- the far-horizon poses the photo preset generates (every tilt and window, before
+  verification), their distance to the true position;
+- the rank of the best-placed pose by the search's own cost and by the verification
+  score (the ranks the localizer refines from: the best 8 by each), for poses within
+  250 m, 500 m and 1 km of the truth; ``-`` where no pose is that close;
+- with ``--true-skyline`` the same from the photo's true skyline (its mask): what a
+  perfect skyline extractor would give.
+
+A photo whose truth has no pose within 1 km is lost by the search (grid, near ridges,
+tilt, the cost); one with such a pose ranked beyond the 8th is lost by the ranking.
+Writes ``experiments/ch1/candidates-<side>.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import numpy as np
+
+RADII_M = (250.0, 500.0, 1000.0)
+REFINED_PER_RANKING = 8  # the photo preset refines the best 8 by each ranking
+
+
+def first_rank(order: np.ndarray, distance: np.ndarray, radius: float) -> int | None:
+    """1-based rank in ``order`` (indices, best first) of the first pose within ``radius`` m."""
+    hit = np.flatnonzero(distance[order] <= radius)
+    return int(hit[0]) + 1 if len(hit) else None
+
+
+def probe(items, true_skyline: bool = False, progress: bool = True, params=None) -> list[dict]:
+    from ..benchmarks.real_localize import DEM_DIR, place_window, places_of, tiles_around
+    from ..camera import Intrinsics
+    from ..dem import load_dem
+    from ..features import extract_skyline, load_photo
+    from ..features.skyline import SkylineParams
+    from ..localizer import LocalizeParams
+    from ..localizer.horizon_search import horizon_poses
+    from ..localizer.pipeline import column_weights
+    from ..localizer.verification import verify_poses
+    from ..model import ModelParams, cached_model
+    from ..render import Terrain
+
+    params = params or LocalizeParams.for_photos()
+    place_of, centres = places_of(items)
+    rows, loaded = [], {}
+    for n, it in enumerate(items):
+        lat, lon = centres[place_of[it.key]]
+        window = place_window(lat, lon)
+        if window not in loaded:
+            loaded.clear()
+            dem = load_dem(tiles_around(lat, lon, DEM_DIR), bounds=window)
+            terrain = Terrain(dem)
+            loaded[window] = (dem, terrain, cached_model(dem, ModelParams.for_photos(), terrain=terrain))
+        dem, terrain, model = loaded[window]
+        t = time.perf_counter()
+        image = load_photo(it.image_path)
+        H, W = image.shape[:2]
+        if true_skyline:
+            sky, weights = it.truth_skyline(), np.ones(W)
+        else:
+            extracted = extract_skyline(image, SkylineParams(method=params.skyline_method))
+            sky, weights = extracted.skyline, column_weights(extracted.confidence, params.confidence_power)
+        k = Intrinsics(W, H, it.focal_px, W / 2, H / 2)
+        poses, cost = horizon_poses(model.horizons, sky, weights, k, dem, 2.0, params.horizon)
+        score, trusted = verify_poses(terrain, poses, k, sky, weights, params.verify_stride, params=params.score)
+        tx, ty = (float(v) for v in dem.from_lonlat(it.lon, it.lat))
+        distance = np.hypot(poses[:, 0] - tx, poses[:, 1] - ty)
+        nearest = np.hypot(model.horizons.centres[:, 0] - tx, model.horizons.centres[:, 1] - ty).min()
+        row = {"photo": it.key, "poses": int(len(poses)), "nearest_pose_m": float(distance.min()) if len(poses) else None,
+               "nearest_centre_m": float(nearest), "seconds": time.perf_counter() - t}
+        for name, values in (("cost", cost), ("score", score), ("trusted", trusted)):
+            order = np.argsort(values, kind="stable")
+            row[f"rank_{name}"] = {f"{r:.0f}": first_rank(order, distance, r) for r in RADII_M}
+        rows.append(row)
+        if progress:
+            r1 = {k_: row[f"rank_{k_}"]["1000"] for k_ in ("cost", "score", "trusted")}
+            print(f"  [{n + 1}/{len(items)}] {it.key}: {row['poses']} poses, nearest {row['nearest_pose_m']:.0f} m; "
+                  f"rank of the first within 1 km by cost / score / trusted: {r1}", flush=True)
+    return rows
+
+
+def summary(rows: list[dict]) -> dict:
+    """Per radius: photos with a pose that close, and with one among the refined ranks."""
+    out = {}
+    for r in RADII_M:
+        key = f"{r:.0f}"
+        found = [row for row in rows if row["rank_cost"][key] is not None]
+        refined = [row for row in found if any(row[f"rank_{k}"][key] <= REFINED_PER_RANKING
+                                               for k in ("cost", "score") if row[f"rank_{k}"][key] is not None)]
+        out[key] = {"photos": len(rows), "with_a_pose": len(found), "among_refined": len(refined)}
+    return out
+
+
+def main(argv=None) -> int:
+    from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
+    from ..evaluate import git_commit
+
+    parser = argparse.ArgumentParser(prog="python -m skyrender.diagnostics.candidates", description=__doc__.splitlines()[0])
+    parser.add_argument("--side", default="train", choices=["train", "dev", "validation"])
+    parser.add_argument("--limit", type=int, default=0, help="at most N photos, spread over the side")
+    parser.add_argument("--true-skyline", action="store_true", help="the photo's true skyline instead of the extracted one")
+    parser.add_argument("--set", default=None, metavar="JSON", help="overrides of the photo preset (a probe)")
+    parser.add_argument("--tag", default="", help="output file candidates-<side>[-true]-<tag>.json")
+    parser.add_argument("--out", default=os.path.join(REPO, "experiments", "ch1"))
+    args = parser.parse_args(argv)
+    from ..localizer import LocalizeParams
+
+    params = LocalizeParams.for_photos()
+    if args.set:
+        params = LocalizeParams.from_dict(json.loads(args.set), params)
+    if not os.path.isdir(DEFAULT_PHOTOS):
+        print(f"no photos at {DEFAULT_PHOTOS}")
+        return 2
+    items = [it for it in items_on_side(args.side) if it.key.startswith("ch1/")]
+    if args.limit:
+        items = items[:: max(1, len(items) // args.limit)][: args.limit]
+    rows = probe(items, args.true_skyline, params=params)
+    s = summary(rows)
+    for key, v in s.items():
+        print(f"within {key} m: a pose for {v['with_a_pose']} of {v['photos']} photos; among the refined "
+              f"(best {REFINED_PER_RANKING} by cost or score) for {v['among_refined']}")
+    tag = f"{args.side}{'-true' if args.true_skyline else ''}{'-' + args.tag if args.tag else ''}"
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, f"candidates-{tag}.json"), "w") as f:
+        json.dump({"commit": git_commit(), "side": args.side, "true_skyline": args.true_skyline, "set": args.set, "summary": s,
+                   "photos": rows}, f, indent=1)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
