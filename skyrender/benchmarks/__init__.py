@@ -2,6 +2,21 @@
 
 import json
 import os
+import time
+
+
+def median_seconds(fn, repeats: int) -> float:
+    """Median wall time (s) of ``fn()`` over ``repeats`` runs after one warm-up run: every
+    benchmark times its figure and its baseline this way."""
+    import numpy as np
+
+    fn()
+    times = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return float(np.median(times))
 
 
 def write_figures(path: str, figures: dict, **extra) -> str:

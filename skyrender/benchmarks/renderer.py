@@ -14,23 +14,16 @@ from __future__ import annotations
 
 import argparse
 import os
-import time
 
 import numpy as np
 
 from ..evaluate import REPO
-from . import write_figures
+from . import median_seconds, write_figures
 
 
 def _best_ms(fn, repeats: int) -> float:
     """Median wall time of ``fn()`` over ``repeats`` runs, in ms (after one warm-up)."""
-    fn()
-    times = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return 1000.0 * float(np.median(times))
+    return 1000.0 * median_seconds(fn, repeats)
 
 
 def benchmark_view(dem):

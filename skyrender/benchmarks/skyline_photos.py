@@ -95,8 +95,10 @@ def evaluate(items, methods: list[str], progress: bool = True) -> list[dict]:
             t = time.perf_counter()
             if method == "otsu":
                 skyline, confidence = otsu_baseline(image), None
-            else:
-                result = extract_skyline(image, SkylineParams(method=method))
+            else:  # "hybrid@512": the method with the network run 512 px wide
+                name, _, width = method.partition("@")
+                params = SkylineParams(method=name) if not width else SkylineParams(method=name, net_width=int(width))
+                result = extract_skyline(image, params)
                 skyline, confidence = result.skyline, result.confidence
             seconds = time.perf_counter() - t
             e = column_errors(skyline, truth)

@@ -29,18 +29,8 @@ from ..model import build_model
 from ..render import Terrain, render_skylines
 from ..render.photo import Look, render_photo
 from ..scale import SplitSolver, dask_client
-from . import write_figures
+from . import median_seconds, write_figures
 from .views import sample_views
-
-
-def _median_s(fn, repeats: int = 3) -> float:
-    fn()
-    times = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return float(np.median(times))
 
 
 def main(argv=None) -> int:
@@ -63,13 +53,13 @@ def main(argv=None) -> int:
     photos = [render_photo(terrain, pose, intr, Look(seed=i)).image for i, pose in enumerate(sample.poses)]
     print(f"{n} hypotheses of view 0; {len(photos)} views; {os.cpu_count()} cores")
 
-    local_s = _median_s(lambda: solve_poses(dem, img, world, 2.0, intr.f_px, intr.cx, intr.cy))
+    local_s = median_seconds(lambda: solve_poses(dem, img, world, 2.0, intr.f_px, intr.cx, intr.cy), 3)
     local_runs = [localize(photo, model, 2.0, 60.0, terrain=terrain) for photo in photos]
     t = time.perf_counter()
     with dask_client(workers=args.workers) as client:
         split = SplitSolver(client, dem)
         start_s = time.perf_counter() - t
-        split_s = _median_s(lambda: split(dem, img, world, 2.0, intr.f_px, intr.cx, intr.cy))
+        split_s = median_seconds(lambda: split(dem, img, world, 2.0, intr.f_px, intr.cx, intr.cy), 3)
         same = all(np.array_equal(a, b, equal_nan=True) for a, b in
                    zip(split(dem, img, world, 2.0, intr.f_px, intr.cx, intr.cy),
                        solve_poses(dem, img, world, 2.0, intr.f_px, intr.cx, intr.cy)))

@@ -17,7 +17,11 @@ from functools import lru_cache
 
 import numpy as np
 
-NET_WIDTH = 512  # photos are reduced to this width for the network
+# photos are reduced to this width for the network (trained at 352-544 px). Chosen on the dev
+# photos for the hybrid extractor: mean within 5 px 92.8 / 92.9 / 93.9 / 94.3 / 95.1 / 93.9 %
+# at 512 / 448 / 384 / 320 / 256 / 192 px (the network alone 90.5-91.1 % at all of them):
+# a coarser network still finds where the boundary is, and the per-photo mixtures draw it
+NET_WIDTH = 256
 STRIDE = 16  # the network's total down-sampling: input sides are multiples of it
 WEIGHTS = os.path.join(os.path.dirname(__file__), "weights", "sky_net.onnx")
 

@@ -33,7 +33,7 @@ from functools import lru_cache
 import numpy as np
 
 from .sky import pixel_features, sky_probability
-from .sky_net import sky_logits
+from .sky_net import NET_WIDTH, sky_logits
 
 FITTED = os.path.join(os.path.dirname(__file__), "weights", "sky_net_fit.json")  # by skyrender.training.skyline_fit
 
@@ -52,6 +52,8 @@ class SkylineParams:
     net_edge_bonus: float | None = None
     net_jump_cost: float | None = None
     net_jump_cap: float | None = None
+    # the sky network's input width (px; the photo is reduced to it, never enlarged)
+    net_width: int = NET_WIDTH
     # wider photos are processed on a copy reduced to this width; the boundary search's weights
     # are in pixels, so both extractors are scale-sensitive (gmm's were set on 1388-wide photos)
     work_width: int = 1600
@@ -214,7 +216,7 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
         p = _gmm_probability(features, edges, texture, params)
         rows = _boundary(p, edges, params.edge_bonus, params.jump_cost, params.jump_cap, texture)
     elif params.method in ("net", "hybrid"):
-        p = p_net = net_probability(image)
+        p = p_net = net_probability(image, net_width=params.net_width)
         rows = _boundary(p_net, edges, *_net_boundary_weights(params))
         if params.method == "hybrid":
             texture = _texture_cost(features, params.texture_weight)
@@ -243,9 +245,10 @@ def _hybrid_probability(features: np.ndarray, p_net: np.ndarray, rows: np.ndarra
     sky to a bad first guess, as per-photo mixtures can), then colour-texture mixtures are
     fitted to *this* photo's pixels on either side of it, ``params.band`` px clear, and
     their evidence is added to half the network's log-odds (the network is blurred by its
-    512-px input; the mixtures see every pixel). The weight of one half was chosen on the
-    dev photos (mean within 5 px 93.1 % against 92.9 % with weight 1 and 90.5 % for the
-    network alone)."""
+    reduced input, :data:`~skyrender.features.sky_net.NET_WIDTH` px wide; the mixtures see
+    every pixel). The weight of one half was chosen on the dev photos (mean within 5 px 93.1 %
+    against 92.9 % with weight 1 and 90.5 % for the network alone, at a 512-px input, where
+    weight 2, or the mixtures' evidence clipped at +-3 or +-5 instead of +-10, did worse too)."""
     H = p_net.shape[0]
     v = np.arange(H)[:, None]
     sky = (v < rows[None, :] - params.band) & (p_net > 0.5)
@@ -263,13 +266,13 @@ def _logit(p: np.ndarray) -> np.ndarray:
     return np.log(p / (1 - p))
 
 
-def net_probability(image: np.ndarray, weights: str | None = None) -> np.ndarray:
-    """(H, W) float32 P(sky) of the sky network (another ONNX file: ``weights``), scaled up
-    to the photo's size."""
+def net_probability(image: np.ndarray, weights: str | None = None, net_width: int = NET_WIDTH) -> np.ndarray:
+    """(H, W) float32 P(sky) of the sky network (another ONNX file: ``weights``) on a copy
+    ``net_width`` px wide, scaled up to the photo's size."""
     import cv2
 
     H, W = image.shape[:2]
-    logits = sky_logits(image) if weights is None else sky_logits(image, weights=weights)
+    logits = sky_logits(image, net_width) if weights is None else sky_logits(image, net_width, weights=weights)
     logits = cv2.resize(logits, (W, H), interpolation=cv2.INTER_LINEAR)
     return (1.0 / (1.0 + np.exp(-np.clip(logits, -30, 30)))).astype(np.float32)
 

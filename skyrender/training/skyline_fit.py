@@ -25,6 +25,7 @@ import numpy as np
 from ..benchmarks.skyline_photos import column_errors
 from ..datasets.real_photos import items_on_side
 from ..features.sky import pixel_features
+from ..features.sky_net import NET_WIDTH
 from ..features.skyline import (
     FITTED,
     _boundary,
@@ -40,8 +41,9 @@ JUMP_COST = (0.5, 1.0, 2.0, 4.0)
 JUMP_CAP = (24.0, 48.0, 96.0)
 
 
-def prepared(photos: int, weights: str | None = None):
-    """(features, colour edges, P(sky), truth) of up to ``photos`` dev photos, evenly spread."""
+def prepared(photos: int, weights: str | None = None, net_width: int = NET_WIDTH):
+    """(features, colour edges, P(sky), truth) of up to ``photos`` dev photos, evenly spread;
+    the network run ``net_width`` px wide."""
     from ..features.photo_io import load_photo
 
     items = items_on_side("dev")
@@ -50,7 +52,8 @@ def prepared(photos: int, weights: str | None = None):
     for it in items[::step]:
         image = load_photo(it.image_path)
         features = pixel_features(image)
-        out.append((features, _edge_strength(features, 97.0), net_probability(image, weights), it.truth_skyline()))
+        out.append((features, _edge_strength(features, 97.0), net_probability(image, weights, net_width),
+                    it.truth_skyline()))
     return out
 
 
@@ -61,10 +64,10 @@ def skyline_with(features, edges, p, edge: float, cost: float, cap: float):
     return boundary_skyline(rows, sub, p.shape[0]), rows, contrast
 
 
-def fit(photos: int = 0, weights: str | None = None, write: bool = True) -> dict:
+def fit(photos: int = 0, weights: str | None = None, write: bool = True, net_width: int = NET_WIDTH) -> dict:
     from sklearn.linear_model import LogisticRegression
 
-    data = prepared(photos, weights)
+    data = prepared(photos, weights, net_width)
     best = None
     for edge, cost, cap in itertools.product(EDGE_BONUS, JUMP_COST, JUMP_CAP):
         scores = []
@@ -83,7 +86,8 @@ def fit(photos: int = 0, weights: str | None = None, write: bool = True) -> dict
         ys.append(column_errors(skyline, truth) <= 5)
     x, y = np.concatenate(xs), np.concatenate(ys)
     model = LogisticRegression(C=1.0, max_iter=1000).fit(x, y) if len(set(y.tolist())) > 1 else None
-    result = {"net_edge_bonus": edge, "net_jump_cost": cost, "net_jump_cap": cap, "dev_mean_within5": score,
+    result = {"net_width": net_width, "net_edge_bonus": edge, "net_jump_cost": cost, "net_jump_cap": cap,
+              "dev_mean_within5": score,
               "photos": len(data), "columns": int(len(y)), "columns_within5": float(np.mean(y)),
               "coef": model.coef_[0].tolist() if model else [0.0, 0.0, 0.0, 0.0],
               "intercept": float(model.intercept_[0]) if model else 10.0,
@@ -98,9 +102,10 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--photos", type=int, default=0, help="at most this many dev photos (0: all)")
     parser.add_argument("--weights", default=None, help="another network's ONNX file (to compare set-ups)")
+    parser.add_argument("--net-width", type=int, default=NET_WIDTH, help="the network's input width (px)")
     parser.add_argument("--dry-run", action="store_true", help="print, do not write the fitted file")
     args = parser.parse_args(argv)
-    r = fit(args.photos, args.weights, write=not args.dry_run)
+    r = fit(args.photos, args.weights, write=not args.dry_run, net_width=args.net_width)
     print(f"best: edge bonus {r['net_edge_bonus']}, jump cost {r['net_jump_cost']}, jump cap {r['net_jump_cap']} "
           f"(dev mean within 5 px {100 * r['dev_mean_within5']:.2f} %)" + ("" if args.dry_run else f"; written to {FITTED}"))
     return 0
