@@ -210,7 +210,7 @@ class _Localizer:
 
     def run(self, view: dict, conf: Configuration) -> dict:
         from .camera import Intrinsics, Pose
-        from .features import SkylineParams, extract_skyline, load_photo
+        from .features import extract_skyline, load_photo
         from .localizer import localize
 
         params = conf.params()
@@ -222,7 +222,7 @@ class _Localizer:
             prior_id = peak_in_view(model, truth, intrinsics, np.load(view["paths"]["skyline"]))
         t = time.perf_counter()
         image = load_photo(view["paths"]["image"])
-        skyline = extract_skyline(image, SkylineParams(method=params.skyline_method))
+        skyline = extract_skyline(image, params.skyline_params())
         result = localize(image, model, float(view["height_above_ground"]),
                           float(view["fov"]) if conf.fov == "known" else None,
                           None if prior_id is None else {"ids": [prior_id]}, terrain=self.terrain, skyline=skyline,

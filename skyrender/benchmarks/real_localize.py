@@ -56,7 +56,6 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
     searches several focal lengths, so it takes several times longer)."""
     from ..dem import load_dem
     from ..features import extract_skyline, load_photo
-    from ..features.skyline import SkylineParams
     from ..localizer import LocalizeParams, localize
     from ..model import ModelParams, cached_model
     from ..render import Terrain
@@ -83,7 +82,7 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
                 continue
             t = time.perf_counter()
             image = load_photo(it.image_path)
-            skyline = extract_skyline(image, SkylineParams(method=params.skyline_method))
+            skyline = extract_skyline(image, params.skyline_params())
             fov = float(np.degrees(2 * np.arctan(image.shape[1] / (2 * it.focal_px)))) if mode == "known" else None
             result = localize(image, model, 2.0, fov, terrain=terrain, skyline=skyline, params=params)
             seconds = time.perf_counter() - t

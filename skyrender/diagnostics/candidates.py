@@ -43,7 +43,6 @@ def probe(items, true_skyline: bool = False, progress: bool = True, params=None)
     from ..camera import Intrinsics
     from ..dem import load_dem
     from ..features import extract_skyline, load_photo
-    from ..features.skyline import SkylineParams
     from ..localizer import LocalizeParams
     from ..localizer.horizon_search import horizon_poses
     from ..localizer.pipeline import column_weights
@@ -69,7 +68,7 @@ def probe(items, true_skyline: bool = False, progress: bool = True, params=None)
         if true_skyline:
             sky, weights = it.truth_skyline(), np.ones(W)
         else:
-            extracted = extract_skyline(image, SkylineParams(method=params.skyline_method))
+            extracted = extract_skyline(image, params.skyline_params())
             sky, weights = extracted.skyline, column_weights(extracted.confidence, params.confidence_power)
         k = Intrinsics(W, H, it.focal_px, W / 2, H / 2)
         poses, cost = horizon_poses(model.horizons, sky, weights, k, dem, 2.0, params.horizon)
