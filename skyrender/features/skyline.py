@@ -38,6 +38,12 @@ from .sky_net import NET_WIDTH, sky_logits
 FITTED = os.path.join(os.path.dirname(__file__), "weights", "sky_net_fit.json")  # by skyrender.training.skyline_fit
 
 
+def fitted_path(net_width: int = NET_WIDTH) -> str:
+    """Where the boundary weights and column confidence fitted for a network ``net_width`` px
+    wide are kept: ``sky_net_fit.json`` for the default width, ``sky_net_fit-<width>.json`` else."""
+    return FITTED if net_width == NET_WIDTH else FITTED.replace(".json", f"-{net_width}.json")
+
+
 @dataclass(frozen=True)
 class SkylineParams:
     # "gmm": per-photo colour mixtures (default: it also holds on renders); "net": the learned
@@ -229,13 +235,14 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
     if params.method == "gmm":
         return ExtractedSkyline(skyline, column_confidence(p, rows, contrast, skyline, fitted=False), p)
     # the confidence model was fitted on the network's probability: its cues come from that
-    return ExtractedSkyline(skyline, column_confidence(p_net, rows, contrast, skyline, fitted=True), p)
+    return ExtractedSkyline(skyline, column_confidence(p_net, rows, contrast, skyline, fitted=True,
+                                                       net_width=params.net_width), p)
 
 
 def _net_boundary_weights(params: SkylineParams) -> tuple[float, float, float]:
     """(edge bonus, jump cost, jump cap) of the boundary search on the network's probability:
     the params' own, or as fitted on the dev photos where they are None."""
-    fitted = _fitted()
+    fitted = _fitted(params.net_width)
     return tuple(fitted[k] if getattr(params, k) is None else getattr(params, k)
                  for k in ("net_edge_bonus", "net_jump_cost", "net_jump_cap"))
 
@@ -345,22 +352,25 @@ def confidence_features(p: np.ndarray, rows: np.ndarray, contrast: np.ndarray, s
 DEFAULT_FIT = {"net_edge_bonus": 4.0, "net_jump_cost": 0.25, "net_jump_cap": 12.0, "coef": None, "intercept": None}
 
 
-@lru_cache(maxsize=1)
-def _fitted() -> dict:
-    """The weights fitted on the dev photos, or neutral ones before any fit."""
-    if not os.path.exists(FITTED):
+@lru_cache(maxsize=4)
+def _fitted(net_width: int = NET_WIDTH) -> dict:
+    """The weights fitted on the dev photos for the network at ``net_width`` (those of the
+    default width where that width has none), or neutral ones before any fit."""
+    path = fitted_path(net_width) if os.path.exists(fitted_path(net_width)) else FITTED
+    if not os.path.exists(path):
         return DEFAULT_FIT
-    with open(FITTED) as f:
+    with open(path) as f:
         return {**DEFAULT_FIT, **json.load(f)}
 
 
 def column_confidence(p: np.ndarray, rows: np.ndarray, contrast: np.ndarray, skyline: np.ndarray,
-                      fitted: bool = True) -> np.ndarray:
-    """(W,) in [0, 1]. ``fitted`` (the network's probability): the probability, fitted on the
-    dev photos, that the column is within 5 px of the truth; otherwise (the per-photo
-    mixtures, or no fitted model shipped) the probability margin times the contrast / 15."""
+                      fitted: bool = True, net_width: int = NET_WIDTH) -> np.ndarray:
+    """(W,) in [0, 1]. ``fitted`` (the network's probability, run ``net_width`` px wide): the
+    probability, fitted on the dev photos, that the column is within 5 px of the truth;
+    otherwise (the per-photo mixtures, or no fitted model shipped) the probability margin
+    times the contrast / 15."""
     x = confidence_features(p, rows, contrast, skyline)
-    model = _fitted()
+    model = _fitted(net_width)
     if not fitted or model["coef"] is None:
         return np.clip(x[:, 0], 0, 1) * np.clip(x[:, 1], 0, 1)
     return 1.0 / (1.0 + np.exp(-(x @ np.asarray(model["coef"]) + model["intercept"])))

@@ -27,12 +27,12 @@ from ..datasets.real_photos import items_on_side
 from ..features.sky import pixel_features
 from ..features.sky_net import NET_WIDTH
 from ..features.skyline import (
-    FITTED,
     _boundary,
     _edge_strength,
     _subpixel,
     boundary_skyline,
     confidence_features,
+    fitted_path,
     net_probability,
 )
 
@@ -93,7 +93,7 @@ def fit(photos: int = 0, weights: str | None = None, write: bool = True, net_wid
               "intercept": float(model.intercept_[0]) if model else 10.0,
               "features": ["margin", "contrast/15", "roughness px", "1-|2p-1|"]}
     if write:
-        with open(FITTED, "w") as f:
+        with open(fitted_path(net_width), "w") as f:
             json.dump(result, f, indent=1)
     return result
 
@@ -106,8 +106,9 @@ def main(argv=None) -> int:
     parser.add_argument("--dry-run", action="store_true", help="print, do not write the fitted file")
     args = parser.parse_args(argv)
     r = fit(args.photos, args.weights, write=not args.dry_run, net_width=args.net_width)
+    where = "" if args.dry_run else f"; written to {fitted_path(args.net_width)}"
     print(f"best: edge bonus {r['net_edge_bonus']}, jump cost {r['net_jump_cost']}, jump cap {r['net_jump_cap']} "
-          f"(dev mean within 5 px {100 * r['dev_mean_within5']:.2f} %)" + ("" if args.dry_run else f"; written to {FITTED}"))
+          f"(dev mean within 5 px {100 * r['dev_mean_within5']:.2f} %){where}")
     return 0
 
 
