@@ -75,11 +75,6 @@ PHOTO_MARGIN_LOGIT = _photo_margin_logit(_FIT)
 #: the training photos (``localize_fit.abstain_threshold``): above every wrong answer there, and
 #: at least 0.5.
 PHOTO_MIN_CONFIDENCE = float(_FIT.get("min_confidence", 0.8))
-#: The photo preset's skyline network width (px): that confidence was fitted, and the CH1
-#: validation side localized, with the network 512 px wide. The extractor's own default is
-#: now 256 (better on unseen photos: experiments/photos/); the preset follows once the
-#: confidence is refitted and the validation side rerun with it.
-PHOTO_NET_WIDTH = 512
 
 
 @dataclass(frozen=True)
@@ -132,8 +127,8 @@ class LocalizeParams:
         wrong poses overlap (1.1-2.4 vs 1.1-4.0 px on CH1 training photos), but the
         margin to the best pose over 1 km away separates them, so the confidence is a
         logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`)."""
-        return cls(skyline_method="hybrid", skyline_net_width=PHOTO_NET_WIDTH, max_hypotheses=0, final_refinements=8,
-                   max_refinements=4, max_horizon_refinements=16,
+        return cls(skyline_method="hybrid", max_hypotheses=0, final_refinements=8, max_refinements=4,
+                   max_horizon_refinements=16,
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=1000.0, confidence_model="margin",
                    margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,
                    horizon=HorizonSearchParams(tilts=(-10.0, 0.0, 10.0, 20.0, 30.0), terms=2, rank_by_cost=True))
