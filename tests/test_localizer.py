@@ -620,3 +620,26 @@ def test_split_solver_on_dask_workers_gives_the_local_poses(scene):
     assert np.isfinite(local[1]).sum() > 0
     for a, b in zip(local, spread):
         np.testing.assert_array_equal(a, b)
+
+
+def test_refinement_fits_the_camera_height_within_its_bound(scene, views):
+    """RefineParams.fit_height_m frees the camera height in the last least-squares stage:
+    a camera 25 m above the ground, refined from its true position and orientation with
+    the height assumed 2 m, ends nearer 25 m with the height free (bounded to 2 + 40 m),
+    and stays at 2 m with it fixed. Measured: 11.3 m, score 0.024 px against 0.038 px (a
+    skyline 10-15 km away pins the height only loosely)."""
+    from skyrender.localizer.refinement import RefineParams
+
+    dem, terrain, model = scene
+    t = views.poses[0]
+    truth = dem.camera_pose(t.x, t.y, 25.0, t.pan, t.tilt, t.swing)
+    sky = render_skylines(terrain, truth, K)
+    start = truth.array().copy()
+    start[2] = dem.ground(*start[:2]) + 2.0
+    fixed = refine_pose(terrain, start, K, 2.0, sky, np.ones(640))
+    free = refine_pose(terrain, start, K, 2.0, sky, np.ones(640), refine=RefineParams(fit_height_m=40.0))
+    height_of = lambda r: r.pose[2] - dem.ground(*r.pose[:2])  # noqa: E731
+    assert height_of(fixed) == pytest.approx(2.0)
+    assert 2.0 < height_of(free) <= 42.0 + 1e-6
+    assert abs(height_of(free) - 25.0) < abs(height_of(fixed) - 25.0)
+    assert free.score <= fixed.score

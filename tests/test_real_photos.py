@@ -238,3 +238,19 @@ def test_a_ch1_validation_photo_is_localized_within_a_kilometre():
     x, y = (float(v) for v in dem.from_lonlat(item.lon, item.lat))
     assert result.localized
     assert np.hypot(result.pose[0] - x, result.pose[1] - y) < 1000.0
+
+
+def test_column_weights_and_the_recall_rank_of_the_diagnostic():
+    """Pure helpers of the real-photo path: column weights from the per-column confidence
+    (floored at 0.05, raised to a power) and the diagnostic's rank of the first pose near
+    the truth."""
+    from skyrender.diagnostics.candidates import first_rank
+    from skyrender.localizer.pipeline import column_weights
+
+    w = column_weights(np.array([0.0, 0.5, 1.0]), power=3.0)
+    np.testing.assert_allclose(w, [0.05**3, 0.125, 1.0])
+    order = np.array([2, 0, 1])  # best first
+    distance = np.array([300.0, 2000.0, 1500.0])
+    assert first_rank(order, distance, 500.0) == 2  # pose 0, ranked second
+    assert first_rank(order, distance, 1600.0) == 1
+    assert first_rank(order, distance, 100.0) is None
