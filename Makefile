@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: install demo test fuzz fit-photo-confidence bench bench-render bench-skyline bench-localize bench-split bench-real oracle train-sky-net experiment-naval2000 clean
+.PHONY: install demo test fuzz fit-photo-confidence bench bench-render bench-skyline bench-localize bench-split bench-scale bench-real oracle train-sky-net experiment-naval2000 clean
 
 install: $(STAMP)
 
@@ -43,6 +43,10 @@ oracle: install
 
 bench-localize: install
 	$(BIN)/python -m skyrender.benchmarks.localizer
+
+# the CLI at scale: synthetic 600², a whole SRTM3 tile, a 1-arc-second tile, 2 x 2 tiles (time, peak RSS; ~30 min)
+bench-scale: install
+	$(BIN)/python -m skyrender.benchmarks.scale
 
 # one localization's hypothesis search on 2 Dask workers against this process
 bench-split: install

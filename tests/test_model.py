@@ -243,3 +243,21 @@ def test_cli_model_bad_input_gives_one_line_and_exit_2(case, tmp_path, capsys):
     code, err = _cli(capsys, ["model", str(dem_path), "--cell-size", "50", "--out", str(out)])
     assert code == 2
     assert len(err) == 1 and err[0].startswith("skyrender: error:")
+
+
+def test_a_fine_dem_renders_its_model_statistics_on_coarser_blocks():
+    """Cells finer than ``render_cell_m`` / 1.5 (a 1-arc-second tile's 26 m: 2 x 2 blocks):
+    the peaks are the fine DEM's own, the horizons' centres stand on it, and the far horizons
+    from the coarser mesh are close to the full mesh's, a little lower (block means round off
+    ridges). Measured on this rough 20 m fractal: p90 1.39 deg, mean signed -0.60 deg; on the
+    real 1" Glarus DEM p90 0.18 deg, signed -0.12 deg (the 3" grid itself: p90 0.36 deg)."""
+    assert [ModelParams().render_factor(c) for c in (77.0, 50.0, 30.0, 26.0, 10.0)] == [1, 1, 1, 2, 4]
+    assert ModelParams(render_cell_m=0).render_factor(10.0) == 1
+    dem = fractal_terrain(300, 20.0, seed=5)
+    params = ModelParams(covisibility=CovisibilityParams(spacing=1500.0))
+    coarse = build_model(dem, params)
+    full = build_model(dem, ModelParams(covisibility=CovisibilityParams(spacing=1500.0), render_cell_m=0))
+    np.testing.assert_array_equal(coarse.features.xyz, full.features.xyz)
+    np.testing.assert_array_equal(coarse.horizons.centres, full.horizons.centres)  # on the DEM itself
+    diff = coarse.horizons.elevation - full.horizons.elevation
+    assert np.percentile(np.abs(diff), 90) < 2.0 and -1.0 < diff.mean() < -0.2

@@ -82,9 +82,22 @@ def meets_target(median: float, within5: float) -> bool:
     return median <= TARGET_MEDIAN_PX and within5 >= TARGET_WITHIN5
 
 
+def method_params(spec: str):
+    """SkylineParams of a method spec ``name[@width][/draftN]``: ``hybrid@512`` the network run
+    512 px wide; ``gmm/draft2`` the mixtures' early rounds on every 2nd row and column."""
+    from ..features import SkylineParams
+
+    spec, _, draft = spec.partition("/draft")
+    name, _, width = spec.partition("@")
+    extra = {"net_width": int(width)} if width else {}
+    if draft:
+        extra["draft_scale"] = int(draft)
+    return SkylineParams(method=name, **extra)
+
+
 def evaluate(items, methods: list[str], progress: bool = True) -> list[dict]:
     """One row per photo: per method median px, within-5 share, seconds; confidence split."""
-    from ..features import SkylineParams, extract_skyline, load_photo
+    from ..features import extract_skyline, load_photo
 
     rows = []
     for k, it in enumerate(items):
@@ -95,10 +108,8 @@ def evaluate(items, methods: list[str], progress: bool = True) -> list[dict]:
             t = time.perf_counter()
             if method == "otsu":
                 skyline, confidence = otsu_baseline(image), None
-            else:  # "hybrid@512": the method with the network run 512 px wide
-                name, _, width = method.partition("@")
-                params = SkylineParams(method=name) if not width else SkylineParams(method=name, net_width=int(width))
-                result = extract_skyline(image, params)
+            else:
+                result = extract_skyline(image, method_params(method))
                 skyline, confidence = result.skyline, result.confidence
             seconds = time.perf_counter() - t
             e = column_errors(skyline, truth)
@@ -153,9 +164,9 @@ def speed(items, method: str = "hybrid", repeats: int = 3) -> dict:
     12-MP copy's median error against the 4x truth."""
     import cv2
 
-    from ..features import SkylineParams, extract_skyline, load_photo
+    from ..features import extract_skyline, load_photo
 
-    net = SkylineParams(method=method)
+    net = method_params(method)
     it = next(i for i in items if i.key.startswith("ch1/"))
     image = load_photo(it.image_path)
     big = cv2.resize(image, (image.shape[1] * 4, image.shape[0] * 4), interpolation=cv2.INTER_CUBIC)

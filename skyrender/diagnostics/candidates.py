@@ -38,7 +38,7 @@ def first_rank(order: np.ndarray, distance: np.ndarray, radius: float) -> int | 
     return int(hit[0]) + 1 if len(hit) else None
 
 
-def probe(items, true_skyline: bool = False, progress: bool = True, params=None) -> list[dict]:
+def probe(items, true_skyline: bool = False, progress: bool = True, params=None, rerank: int = 0) -> list[dict]:
     from ..benchmarks.real_localize import DEM_DIR, place_window, places_of, tiles_around
     from ..camera import Intrinsics
     from ..dem import load_dem
@@ -46,6 +46,7 @@ def probe(items, true_skyline: bool = False, progress: bool = True, params=None)
     from ..localizer import LocalizeParams
     from ..localizer.horizon_search import horizon_poses
     from ..localizer.pipeline import column_weights
+    from ..localizer.refinement import local_rescore
     from ..localizer.verification import verify_poses
     from ..model import ModelParams, cached_model
     from ..render import Terrain
@@ -78,12 +79,21 @@ def probe(items, true_skyline: bool = False, progress: bool = True, params=None)
         nearest = np.hypot(model.horizons.centres[:, 0] - tx, model.horizons.centres[:, 1] - ty).min()
         row = {"photo": it.key, "poses": int(len(poses)), "nearest_pose_m": float(distance.min()) if len(poses) else None,
                "nearest_centre_m": float(nearest), "seconds": time.perf_counter() - t}
-        for name, values in (("cost", cost), ("score", score), ("trusted", trusted)):
+        rankings = [("cost", cost), ("score", score), ("trusted", trusted)]
+        if rerank:  # the best ``rerank`` by score and by cost, each rescored by a local position search
+            t_r = time.perf_counter()
+            both = np.unique(np.r_[np.argsort(score, kind="stable")[:rerank], np.argsort(cost, kind="stable")[:rerank]])
+            local = np.full(len(poses), np.inf)
+            local[both] = local_rescore(terrain, poses[both], k, 2.0, sky, weights, params.rerank_half_m,
+                                        params.rerank_grid, params.verify_stride, params.score)[1]
+            rankings.append(("local", local))
+            row["rerank_seconds"] = time.perf_counter() - t_r
+        for name, values in rankings:
             order = np.argsort(values, kind="stable")
             row[f"rank_{name}"] = {f"{r:.0f}": first_rank(order, distance, r) for r in RADII_M}
         rows.append(row)
         if progress:
-            r1 = {k_: row[f"rank_{k_}"]["1000"] for k_ in ("cost", "score", "trusted")}
+            r1 = {k_: row[f"rank_{k_}"]["1000"] for k_ in ("cost", "score", "trusted", "local") if f"rank_{k_}" in row}
             print(f"  [{n + 1}/{len(items)}] {it.key}: {row['poses']} poses, nearest {row['nearest_pose_m']:.0f} m; "
                   f"rank of the first within 1 km by cost / score / trusted: {r1}", flush=True)
     return rows
@@ -98,6 +108,9 @@ def summary(rows: list[dict]) -> dict:
         refined = [row for row in found if any(row[f"rank_{k}"][key] <= REFINED_PER_RANKING
                                                for k in ("cost", "score") if row[f"rank_{k}"][key] is not None)]
         out[key] = {"photos": len(rows), "with_a_pose": len(found), "among_refined": len(refined)}
+        if rows and "rank_local" in rows[0]:  # the re-ranking probe: the same refinement budget (16) by it alone
+            out[key]["among_best16_local"] = sum(1 for row in found if (row["rank_local"][key] or 10**9) <= 2 * REFINED_PER_RANKING)
+            out[key]["among_best8_local"] = sum(1 for row in found if (row["rank_local"][key] or 10**9) <= REFINED_PER_RANKING)
     return out
 
 
@@ -110,6 +123,8 @@ def main(argv=None) -> int:
     parser.add_argument("--limit", type=int, default=0, help="at most N photos, spread over the side")
     parser.add_argument("--true-skyline", action="store_true", help="the photo's true skyline instead of the extracted one")
     parser.add_argument("--set", default=None, metavar="JSON", help="overrides of the photo preset (a probe)")
+    parser.add_argument("--rerank", type=int, default=0, metavar="K",
+                        help="probe: also rank the best K by score and by cost after a local position search")
     parser.add_argument("--tag", default="", help="output file candidates-<side>[-true]-<tag>.json")
     parser.add_argument("--out", default=os.path.join(REPO, "experiments", "ch1"))
     args = parser.parse_args(argv)
@@ -124,11 +139,13 @@ def main(argv=None) -> int:
     items = [it for it in items_on_side(args.side) if it.key.startswith("ch1/")]
     if args.limit:
         items = items[:: max(1, len(items) // args.limit)][: args.limit]
-    rows = probe(items, args.true_skyline, params=params)
+    rows = probe(items, args.true_skyline, params=params, rerank=args.rerank)
     s = summary(rows)
     for key, v in s.items():
         print(f"within {key} m: a pose for {v['with_a_pose']} of {v['photos']} photos; among the refined "
-              f"(best {REFINED_PER_RANKING} by cost or score) for {v['among_refined']}")
+              f"(best {REFINED_PER_RANKING} by cost or score) for {v['among_refined']}"
+              + (f"; best 8 / 16 after the local search: {v['among_best8_local']} / {v['among_best16_local']}"
+                 if "among_best16_local" in v else ""))
     tag = f"{args.side}{'-true' if args.true_skyline else ''}{'-' + args.tag if args.tag else ''}"
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, f"candidates-{tag}.json"), "w") as f:

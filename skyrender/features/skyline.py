@@ -67,6 +67,9 @@ class SkylineParams:
     rounds: int = 3  # boundary estimate -> re-fit colour models -> boundary
     band: int = 6  # pixels either side of the boundary left out of re-fitting
     texture_weight: float = 0.3  # textured pixels are unlikely sky
+    # gmm: the rounds before the last on every n-th row and column, fitted on this many pixels (1: off)
+    draft_scale: int = 1
+    draft_samples: int = 4_000
 
 
 @dataclass(frozen=True)
@@ -292,19 +295,28 @@ def boundary_skyline(rows: np.ndarray, sub: np.ndarray, H: int) -> np.ndarray:
 
 def _gmm_probability(features: np.ndarray, edges: np.ndarray, texture: np.ndarray | None,
                      params: SkylineParams) -> np.ndarray:
-    """P(sky) from colour-texture mixtures re-fitted to this photo (``method="gmm"``)."""
+    """P(sky) from colour-texture mixtures re-fitted to this photo (``method="gmm"``).
+
+    With ``params.draft_scale`` > 1 the rounds before the last, which only place the next
+    round's training pixels, run on every ``draft_scale``-th row and column and fit on
+    ``draft_samples`` pixels; the last round sees every pixel."""
     H, W = features.shape[:2]
-    prior = _row_prior(H)
     v = np.arange(H)[:, None]
     sky_mask, terrain_mask = initial_seeds(features)
-    for round_ in range(params.rounds):
-        p = sky_probability(features, sky_mask, terrain_mask, prior, components=params.components, seed=round_)
-        if round_ == params.rounds - 1:
-            break
-        rows = _boundary(p, edges, params.edge_bonus, params.jump_cost, params.jump_cap, texture)
+    s = max(1, int(params.draft_scale))
+    draft = features[::s, ::s]
+    for round_ in range(params.rounds - 1):
+        p = sky_probability(draft, sky_mask[::s, ::s], terrain_mask[::s, ::s], _row_prior(draft.shape[0]),
+                            components=params.components, seed=round_,
+                            max_samples=params.draft_samples if s > 1 else 12_000)
+        rows = _boundary(p, _edge_strength(draft, params.edge_percentile) if s > 1 else edges, params.edge_bonus,
+                         params.jump_cost / s,
+                         params.jump_cap, None if texture is None else texture[::s, ::s])
+        rows = np.repeat(rows, s)[:W] * s  # back to full-resolution rows and columns
         sky_mask = v < rows[None, :] - params.band
         terrain_mask = v >= rows[None, :] + params.band
-    return p
+    return sky_probability(features, sky_mask, terrain_mask, _row_prior(H), components=params.components,
+                           seed=params.rounds - 1)
 
 
 def _texture_cost(features: np.ndarray, weight: float) -> np.ndarray | None:

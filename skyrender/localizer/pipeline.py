@@ -43,7 +43,7 @@ from .constraints import in_image_geometry, interfeature_visibility, prior_in_vi
 from .horizon_search import HorizonSearchParams, horizon_poses
 from .hypotheses import Hypotheses, generate_hypotheses
 from .pose_solver import solve_poses
-from .refinement import Refined, RefineParams, refine_pose
+from .refinement import Refined, RefineParams, local_rescore, refine_pose
 from .verification import ScoreParams, verify_poses
 
 #: Focal lengths tried when the field of view is unknown (horizontal fov, degrees).
@@ -112,6 +112,11 @@ class LocalizeParams:
     horizon: HorizonSearchParams = field(default_factory=HorizonSearchParams)
     fov_candidates: tuple = FOV_CANDIDATES  # unknown fov: horizontal fovs (deg) tried first
     horizon_fov_step: tuple = (5.0, 2.5, 1.25)  # unknown fov: probes around the best fov of the far-horizon search
+    # far-horizon poses: the best this many by each ranking are moved to the best of a rerank_grid^2
+    # grid +-rerank_half_m (m) around them and ranked by that score alone (0: off)
+    horizon_rerank: int = 0
+    rerank_half_m: float = 250.0
+    rerank_grid: int = 5
     refine_fov: bool = False  # a given fov is only a start (e.g. from EXIF): refinement fits the focal length too
     score: ScoreParams = field(default_factory=ScoreParams)
     refine: RefineParams = field(default_factory=RefineParams)  # the refinement's search set-up
@@ -427,7 +432,26 @@ def _far_horizon_candidates(search: _Search) -> None:
     # a wrong focal length scales the skyline's azimuths: the best fits pick the fov
     for fov_i in sorted(verified, key=lambda f: _best_of(verified[f][2]))[: 1 if search.fov is not None else 2]:
         f_px, poses, score, trusted = verified[fov_i]
+        if params.horizon_rerank:
+            with stats.timed("rerank"):
+                poses, score, trusted = _rerank(search, poses, score, trusted, fov_i)
         _add_candidates(search.candidates, poses, score, trusted, f_px, None, params)
+
+
+def _rerank(search: _Search, poses: np.ndarray, score: np.ndarray, second: np.ndarray,
+            fov_i: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The best ``horizon_rerank`` far-horizon poses by each ranking (verification score and
+    the second one), each moved to the best of a grid around it (:func:`local_rescore`):
+    those poses, their new scores (the first ranking from now on) and their second ranking;
+    the rest left out."""
+    params = search.params
+    pick = np.unique(np.r_[np.argsort(score, kind="stable")[: params.horizon_rerank],
+                           np.argsort(second, kind="stable")[: params.horizon_rerank]])
+    moved, rescored = local_rescore(search.terrain, poses[pick], search.intrinsics(fov_i), search.height, search.sky,
+                                    search.weights, params.rerank_half_m, params.rerank_grid, params.verify_stride,
+                                    params.score)
+    search.stats.verified += len(pick) * params.rerank_grid ** 2
+    return moved, rescored, second[pick]
 
 
 def _screen_chunk(search: _Search, chunk: Hypotheses, fov_i: float) -> None:

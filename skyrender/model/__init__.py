@@ -42,9 +42,14 @@ def build_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None, 
         raise InputError(f"{dem.name}: no peaks found (a flat or featureless DEM, or radii larger than the DEM)")
     pivots = features.subset(features.major)
     neighbours = k_nearest_features(pivots.xyz[:, :2], features.xyz[:, :2], pivots.id, params.k)
+    factor = params.render_factor(min(dem.cell_size))
+    if factor > 1:  # a fine DEM: the model's statistics need no 26 m mesh (build time and memory)
+        keep = {} if terrain is None else {"curvature": terrain.curvature, "variant": terrain.variant}
+        terrain = Terrain(dem.coarsened(factor), **keep)
     terrain = terrain or Terrain(dem)
     covis = learn_covisibility(terrain, features.xyz, params.covisibility, progress=progress)
-    horizons = build_horizons(terrain, params.horizons)
+    # the horizons' centres stand on the DEM itself: the localizer places its cameras there
+    horizons = build_horizons(terrain, params.horizons, grid_dem=dem)
     return Model(dem, params, features, neighbours, covis, horizons, time.perf_counter() - t0)
 
 
@@ -58,7 +63,10 @@ def model_cache_key(dem: DEM, params: ModelParams = ModelParams()) -> str:
     parameters where they are not the defaults."""
     key = dem.fingerprint()
     if params != ModelParams():
-        key += "-" + hashlib.sha1(json.dumps(params.to_dict(), sort_keys=True).encode()).hexdigest()[:10]
+        d = params.to_dict()
+        if d["render_cell_m"] == ModelParams.render_cell_m:  # keys written before the field existed stay valid
+            del d["render_cell_m"]
+        key += "-" + hashlib.sha1(json.dumps(d, sort_keys=True).encode()).hexdigest()[:10]
     return key
 
 

@@ -55,14 +55,14 @@ class Covisibility:
         return np.divide(rows, denom, out=np.zeros(rows.shape), where=denom > 0)
 
 
-def viewpoint_grid(terrain: Terrain, spacing: float, height: float) -> np.ndarray:
-    """(V, 3) camera positions on a regular grid, ``height`` above the ground."""
-    xmin, xmax, ymin, ymax = terrain.dem.extent
+def viewpoint_grid(dem, spacing: float, height: float) -> np.ndarray:
+    """(V, 3) camera positions on a regular grid over a DEM, ``height`` above its ground."""
+    xmin, xmax, ymin, ymax = dem.extent
     xs = np.arange(xmin + spacing / 2, xmax, spacing)
     ys = np.arange(ymin + spacing / 2, ymax, spacing)
     xx, yy = np.meshgrid(xs, ys)
     x, y = xx.ravel(), yy.ravel()
-    return np.column_stack([x, y, terrain.dem.ground(x, y) + height])
+    return np.column_stack([x, y, dem.ground(x, y) + height])
 
 
 def skyline_features(terrain: Terrain, cameras: np.ndarray, features: np.ndarray,
@@ -97,7 +97,7 @@ def learn_covisibility(terrain: Terrain, features: np.ndarray, params: Covisibil
     features : (F, 3) feature points (m).
     Deterministic; chunks of viewpoints bound the memory.
     """
-    cameras = viewpoint_grid(terrain, params.spacing, params.height)
+    cameras = viewpoint_grid(terrain.dem, params.spacing, params.height)
     cameras = cameras[np.isfinite(cameras[:, 2])]
     F = len(features)
     together = np.zeros((F, F), dtype=np.int64)

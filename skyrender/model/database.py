@@ -38,6 +38,14 @@ class ModelParams:
     k: int = 15
     covisibility: CovisibilityParams = field(default_factory=CovisibilityParams)
     horizons: HorizonParams = field(default_factory=HorizonParams)
+    # co-visibility and far horizons are rendered on the DEM block-averaged to about this cell
+    # size (m) where it is finer (a 1-arc-second tile's 26 m cells: 2 x 2 blocks); peaks, and
+    # every render of the localizer, use the DEM itself (0: always the DEM itself)
+    render_cell_m: float = 40.0
+
+    def render_factor(self, cell_m: float) -> int:
+        """The block factor of the model's renders for a DEM of ``cell_m`` (m) cells."""
+        return max(1, int(round(self.render_cell_m / cell_m))) if self.render_cell_m > 0 else 1
 
     def to_dict(self) -> dict:
         return params_to_dict(self)

@@ -61,9 +61,10 @@ def grid_spacing(extent: tuple[float, float, float, float], params: HorizonParam
     return min(spacing, math.sqrt(area / 16.0))
 
 
-def build_horizons(terrain: Terrain, params: HorizonParams = HorizonParams()) -> Horizons:
-    """Far horizons around a grid of camera centres over ``terrain``'s DEM."""
-    centres = viewpoint_grid(terrain, grid_spacing(terrain.dem.extent, params), params.height)
+def build_horizons(terrain: Terrain, params: HorizonParams = HorizonParams(), grid_dem=None) -> Horizons:
+    """Far horizons around a grid of camera centres over ``grid_dem`` (default: ``terrain``'s DEM)."""
+    grid_dem = terrain.dem if grid_dem is None else grid_dem
+    centres = viewpoint_grid(grid_dem, grid_spacing(grid_dem.extent, params), params.height)
     centres = centres[np.isfinite(centres[:, 2])]
     elevation = render_horizons(terrain, centres, params.bin_deg, params.near_m)
     # at the precision a saved model keeps (float16: 0.03 deg at 60 deg), so that a model

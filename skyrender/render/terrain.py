@@ -25,17 +25,23 @@ from ..dem import DEM
 
 def terrain_mesh_arrays(dem: DEM, origin_xy, c: float) -> tuple[np.ndarray, np.ndarray]:
     """Vertices (rows*cols, 3) float32 in local coordinates, lowered by c |P|^2,
-    and faces (2 (rows-1)(cols-1), 3) uint32 split along the SW-NE diagonal."""
+    and faces (2 (rows-1)(cols-1), 3) uint32 split along the SW-NE diagonal.
+
+    Built in place in their final types: a 1-arc-second tile has 12 M vertices and 25 M
+    faces, and float64 / int64 intermediates of the whole grid would weigh gigabytes."""
     rows, cols = dem.shape
     x = (dem.x_centres - origin_xy[0]).astype(np.float64)
     y = (dem.y_centres - origin_xy[1]).astype(np.float64)
-    xx, yy = np.meshgrid(x, y)
-    zz = dem.elevation - c * (xx**2 + yy**2)
-    vertices = np.stack([xx.ravel(), yy.ravel(), zz.ravel()], axis=1).astype(np.float32)
-    r, col = np.mgrid[0 : rows - 1, 0 : cols - 1]
-    nw = (r * cols + col).ravel()
-    ne, sw, se = nw + 1, nw + cols, nw + cols + 1
-    faces = np.concatenate([np.stack([sw, se, ne], 1), np.stack([sw, ne, nw], 1)]).astype(np.uint32)
+    vertices = np.empty((rows * cols, 3), np.float32)
+    vertices[:, 0] = np.tile(x, rows)
+    vertices[:, 1] = np.repeat(y, cols)
+    vertices[:, 2] = (dem.elevation - c * (x[None, :] ** 2 + y[:, None] ** 2)).ravel()
+    index = np.arange(rows * cols, dtype=np.uint32).reshape(rows, cols)
+    nw, sw = index[:-1, :-1].ravel(), index[1:, :-1].ravel()
+    n = len(nw)
+    faces = np.empty((2 * n, 3), np.uint32)
+    faces[:n, 0], faces[:n, 1], faces[:n, 2] = sw, sw + 1, nw + 1  # (sw, se, ne)
+    faces[n:, 0], faces[n:, 1], faces[n:, 2] = sw, nw + 1, nw  # (sw, ne, nw)
     return vertices, faces
 
 
@@ -86,10 +92,7 @@ class Terrain:
         self.jit = is_jit(self.variant)
         cx, cy = dem.centre
         self.origin = np.array([cx, cy, 0.0])
-        #: the terrain as a trimesh (local to the DEM centre, curvature applied as configured)
-        self.mesh = terrain_trimesh(dem, curvature=curvature)
-        vertices = np.ascontiguousarray(self.mesh.vertices, dtype=np.float32)  # exact: built in float32
-        faces = np.ascontiguousarray(self.mesh.faces, dtype=np.uint32)
+        vertices, faces = terrain_mesh_arrays(dem, self.origin[:2], self.c)
         self.faces = faces
         self.vertices = vertices
         self.scene = mitsuba_scene(self.mi, vertices, faces)
@@ -97,6 +100,12 @@ class Terrain:
         span = float(np.hypot(xmax - xmin, ymax - ymin))
         #: No ray needs to go further than this (metres): replaces the 10 km far clip.
         self.max_distance = 2.0 * span + 10_000.0
+
+    @property
+    def mesh(self):
+        """The terrain as a ``trimesh.Trimesh`` (local to the DEM centre, curvature applied as
+        configured): :func:`terrain_trimesh`, made on demand (it holds float64 copies)."""
+        return terrain_trimesh(self.dem, curvature=self.curvature)
 
     @property
     def face_normals(self) -> np.ndarray:
