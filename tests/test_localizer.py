@@ -129,6 +129,13 @@ def test_hypotheses_are_complete_and_most_probable_first(scene):
     prior = generate_hypotheses(u, size, model, named)
     holds = (prior.features == model.pivots[0]).any(axis=1)
     assert len(prior) == len(hyps) and holds.any() and not holds[np.argmin(holds):].any()  # those first
+    # a limit gives exactly the head of the full list, without building it; equal sizes make ties
+    for sizes, source in ((size, hyps), (np.full(5, 10.0), generate_hypotheses(u, np.full(5, 10.0), model))):
+        for limit in (1, 7, 6 * len(mtri) + 5, len(source) - 1):
+            head = generate_hypotheses(u, sizes, model, limit=limit)
+            assert len(head) == limit
+            for name in ("image", "features", "log_p"):
+                np.testing.assert_array_equal(getattr(head, name), getattr(source, name)[:limit])
 
 
 # --- stage 3c: constraints ---------------------------------------------------------------

@@ -193,7 +193,7 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         def row(name: str, dem: str, fovs, size, n, views=None):
             model_dir = os.path.join(tmp, f"model-{name}")
-            print(f"{name}: building the model of {os.path.basename(dem)}", flush=True)
+            print(f"{name}: building the model of {', '.join(os.path.basename(t) for t in dem.split(','))}", flush=True)
             b = build(dem, model_dir)
             if views is None:
                 os.makedirs(os.path.join(tmp, name), exist_ok=True)

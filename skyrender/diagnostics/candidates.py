@@ -109,8 +109,9 @@ def summary(rows: list[dict]) -> dict:
                                                for k in ("cost", "score") if row[f"rank_{k}"][key] is not None)]
         out[key] = {"photos": len(rows), "with_a_pose": len(found), "among_refined": len(refined)}
         if rows and "rank_local" in rows[0]:  # the re-ranking probe: the same refinement budget (16) by it alone
-            out[key]["among_best16_local"] = sum(1 for row in found if (row["rank_local"][key] or 10**9) <= 2 * REFINED_PER_RANKING)
-            out[key]["among_best8_local"] = sum(1 for row in found if (row["rank_local"][key] or 10**9) <= REFINED_PER_RANKING)
+            local = [row["rank_local"][key] or 10**9 for row in found]
+            out[key]["among_best16_local"] = sum(r <= 2 * REFINED_PER_RANKING for r in local)
+            out[key]["among_best8_local"] = sum(r <= REFINED_PER_RANKING for r in local)
     return out
 
 

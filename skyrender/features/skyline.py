@@ -67,11 +67,14 @@ class SkylineParams:
     rounds: int = 3  # boundary estimate -> re-fit colour models -> boundary
     band: int = 6  # pixels either side of the boundary left out of re-fitting
     texture_weight: float = 0.3  # textured pixels are unlikely sky
-    # gmm: the rounds before the last on every n-th row and column, fitted on this many pixels (1: off);
-    # on the 31 dev photos 2 met the target on 18 (1: 17), mean within 5 px 85.6 % (84.3 %), in 3.05 s
-    # a photo (5.01 s): experiments/photos/probe-gmm-draft2.txt
+    # gmm: the rounds before the last on every n-th row and column, fitted on this many pixels (1: off),
+    # for photos at least draft_min_width px wide (a 320-px render's 160-px draft put a near slope's
+    # training pixels wrong: 58 % within 5 px instead of 70+); on the 31 dev photos 2 met the target
+    # on 18 (1: 17), mean within 5 px 85.6 % (84.3 %), in 3.05 s a photo (5.01 s):
+    # experiments/photos/probe-gmm-draft2.txt
     draft_scale: int = 2
     draft_samples: int = 4_000
+    draft_min_width: int = 640
 
 
 @dataclass(frozen=True)
@@ -301,11 +304,12 @@ def _gmm_probability(features: np.ndarray, edges: np.ndarray, texture: np.ndarra
 
     With ``params.draft_scale`` > 1 the rounds before the last, which only place the next
     round's training pixels, run on every ``draft_scale``-th row and column and fit on
-    ``draft_samples`` pixels; the last round sees every pixel."""
+    ``draft_samples`` pixels (photos ``draft_min_width`` px wide or wider); the last round
+    sees every pixel."""
     H, W = features.shape[:2]
     v = np.arange(H)[:, None]
     sky_mask, terrain_mask = initial_seeds(features)
-    s = max(1, int(params.draft_scale))
+    s = max(1, int(params.draft_scale)) if W >= params.draft_min_width else 1
     draft = features[::s, ::s]
     for round_ in range(params.rounds - 1):
         p = sky_probability(draft, sky_mask[::s, ::s], terrain_mask[::s, ::s], _row_prior(draft.shape[0]),

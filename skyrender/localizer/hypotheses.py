@@ -116,7 +116,7 @@ def model_triples(model: Model, neighbours: str = "nearest", k: int | None = Non
 def generate_hypotheses(peak_u: np.ndarray, peak_size: np.ndarray, model: Model,
                         prior: np.ndarray | None = None, ordered: bool = True, seed: int = 0,
                         neighbours: str = "nearest", k: int | None = None,
-                        prior_boost: float = 1000.0) -> Hypotheses:
+                        prior_boost: float = 1000.0, limit: int | None = None) -> Hypotheses:
     """Every (image triple x model triple x assignment), most probable first.
 
     prior : optional (F,) bool, the feature points a prior says are in view: triples
@@ -124,6 +124,8 @@ def generate_hypotheses(peak_u: np.ndarray, peak_size: np.ndarray, model: Model,
         named peak may still not be among the photo's largest skyline peaks, so the others follow).
     ``ordered=False`` gives the same set in a seeded arbitrary order (the
     baseline without the probabilistic ordering).
+    limit : only the first ``limit`` of that list (ordered): the same hypotheses, without
+        materialising the whole list — on a 2 x 2-tile mosaic it has ~100 M entries (~9 GB).
     """
     itri, log_w = image_triples(peak_u, peak_size)
     mtri, log_m = model_triples(model, neighbours, k)
@@ -132,9 +134,32 @@ def generate_hypotheses(peak_u: np.ndarray, peak_size: np.ndarray, model: Model,
     T, M, A = len(itri), len(mtri), len(PERMUTATIONS)
     if T == 0 or M == 0:
         return Hypotheses(np.zeros((0, 3), np.int64), np.zeros((0, 3), np.int64), np.zeros(0))
-    ti, mi, ai = (g.ravel() for g in np.meshgrid(np.arange(T), np.arange(M), np.arange(A), indexing="ij"))
-    log_p = log_w[ti] + log_m[mi]
-    order = np.argsort(-log_p, kind="stable") if ordered else np.random.default_rng(seed).permutation(len(log_p))
-    ti, mi, ai = ti[order], mi[order], ai[order]
+    if ordered and limit is not None and limit < T * M * A:
+        ti, mi, ai, log_p = _best_pairs(log_w, log_m, -(-limit // A), A)
+        ti, mi, ai, log_p = ti[:limit], mi[:limit], ai[:limit], log_p[:limit]
+    else:
+        ti, mi, ai = (g.ravel() for g in np.meshgrid(np.arange(T), np.arange(M), np.arange(A), indexing="ij"))
+        log_p = log_w[ti] + log_m[mi]
+        order = np.argsort(-log_p, kind="stable") if ordered else np.random.default_rng(seed).permutation(len(log_p))
+        ti, mi, ai, log_p = ti[order], mi[order], ai[order], log_p[order]
+        if limit is not None:
+            ti, mi, ai, log_p = ti[:limit], mi[:limit], ai[:limit], log_p[:limit]
     features = np.take_along_axis(mtri[mi], PERMUTATIONS[ai], axis=1)
-    return Hypotheses(itri[ti], features, log_p[order])
+    return Hypotheses(itri[ti], features, log_p)
+
+
+def _best_pairs(log_w: np.ndarray, log_m: np.ndarray, n_pairs: int, A: int):
+    """The ``n_pairs`` most probable (image triple, model triple) pairs, each expanded to its
+    ``A`` assignments: exactly the head of the stable sort of every (ti, mi, ai) by -log p
+    (a pair's assignments share its probability and sit together in ``ai`` order; equal
+    pairs keep their (ti, mi) order). Returns ti, mi, ai, log p, each (n_pairs * A,)."""
+    pair_p = log_w[:, None] + log_m[None, :]  # (T, M); flat index ti * M + mi
+    flat = pair_p.ravel()
+    n_pairs = min(n_pairs, flat.size)
+    threshold = -np.partition(-flat, n_pairs - 1)[n_pairs - 1]
+    above = np.flatnonzero(flat > threshold)
+    tied = np.flatnonzero(flat == threshold)[: n_pairs - len(above)]  # ties in flat-index order
+    pick = np.concatenate([above, tied])
+    pick = pick[np.lexsort((pick, -flat[pick]))]
+    ti, mi = np.divmod(pick, len(log_m))
+    return (np.repeat(ti, A), np.repeat(mi, A), np.tile(np.arange(A), len(pick)), np.repeat(flat[pick], A))

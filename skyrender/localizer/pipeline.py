@@ -391,8 +391,8 @@ def _three_point_hypotheses(search: _Search, peak_sizes: np.ndarray) -> Hypothes
     hyps = Hypotheses(np.zeros((0, 3), np.int64), np.zeros((0, 3), np.int64), np.zeros(0))
     if len(search.peak_uv) >= 3 and params.max_hypotheses > 0:
         hyps = generate_hypotheses(search.peak_uv[:, 0], peak_sizes, search.model, search.in_view, params.ordered,
-                                   neighbours=params.neighbours, k=params.neighbours_k, prior_boost=params.prior_boost)
-        hyps = hyps.take(slice(0, params.max_hypotheses))
+                                   neighbours=params.neighbours, k=params.neighbours_k, prior_boost=params.prior_boost,
+                                   limit=params.max_hypotheses)
     search.stats.generated = len(hyps) * len(search.fovs)
     return hyps
 
