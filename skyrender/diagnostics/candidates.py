@@ -25,6 +25,7 @@ import argparse
 import json
 import os
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -45,8 +46,7 @@ def probe(items, true_skyline: bool = False, progress: bool = True, params=None,
     from ..features import extract_skyline, load_photo
     from ..localizer import LocalizeParams
     from ..localizer.horizon_search import horizon_poses
-    from ..localizer.pipeline import column_weights
-    from ..localizer.refinement import local_rescore
+    from ..localizer.pipeline import column_weights, rerank_far_horizon
     from ..localizer.verification import verify_poses
     from ..model import ModelParams, cached_model
     from ..render import Terrain
@@ -82,10 +82,10 @@ def probe(items, true_skyline: bool = False, progress: bool = True, params=None,
         rankings = [("cost", cost), ("score", score), ("trusted", trusted)]
         if rerank:  # the best ``rerank`` by score and by cost, each rescored by a local position search
             t_r = time.perf_counter()
-            both = np.unique(np.r_[np.argsort(score, kind="stable")[:rerank], np.argsort(cost, kind="stable")[:rerank]])
+            both, _, rescored = rerank_far_horizon(terrain, poses, score, cost, k, 2.0, sky, weights,
+                                                   replace(params, horizon_rerank=rerank))
             local = np.full(len(poses), np.inf)
-            local[both] = local_rescore(terrain, poses[both], k, 2.0, sky, weights, params.rerank_half_m,
-                                        params.rerank_grid, params.verify_stride, params.score)[1]
+            local[both] = rescored
             rankings.append(("local", local))
             row["rerank_seconds"] = time.perf_counter() - t_r
         for name, values in rankings:

@@ -314,7 +314,7 @@ def _gmm_probability(features: np.ndarray, edges: np.ndarray, texture: np.ndarra
     for round_ in range(params.rounds - 1):
         p = sky_probability(draft, sky_mask[::s, ::s], terrain_mask[::s, ::s], _row_prior(draft.shape[0]),
                             components=params.components, seed=round_,
-                            max_samples=params.draft_samples if s > 1 else 12_000)
+                            **({"max_samples": params.draft_samples} if s > 1 else {}))
         rows = _boundary(p, _edge_strength(draft, params.edge_percentile) if s > 1 else edges, params.edge_bonus,
                          params.jump_cost / s,
                          params.jump_cap, None if texture is None else texture[::s, ::s])

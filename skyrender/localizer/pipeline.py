@@ -113,7 +113,8 @@ class LocalizeParams:
     fov_candidates: tuple = FOV_CANDIDATES  # unknown fov: horizontal fovs (deg) tried first
     horizon_fov_step: tuple = (5.0, 2.5, 1.25)  # unknown fov: probes around the best fov of the far-horizon search
     # far-horizon poses: the best this many by each ranking are moved to the best of a rerank_grid^2
-    # grid +-rerank_half_m (m) around them and ranked by that score alone (0: off)
+    # grid +-rerank_half_m (m) around them, that score their first ranking (0: off; a probe, not in
+    # the photo preset: experiments/ch1/README.md)
     horizon_rerank: int = 0
     rerank_half_m: float = 250.0
     rerank_grid: int = 5
@@ -440,18 +441,24 @@ def _far_horizon_candidates(search: _Search) -> None:
 
 def _rerank(search: _Search, poses: np.ndarray, score: np.ndarray, second: np.ndarray,
             fov_i: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The best ``horizon_rerank`` far-horizon poses by each ranking (verification score and
-    the second one), each moved to the best of a grid around it (:func:`local_rescore`):
-    those poses, their new scores (the first ranking from now on) and their second ranking;
-    the rest left out."""
+    """:func:`rerank_far_horizon` of the far-horizon poses at one fov: the moved poses, their
+    new scores (the first ranking from now on) and their second ranking; the rest left out."""
     params = search.params
-    pick = np.unique(np.r_[np.argsort(score, kind="stable")[: params.horizon_rerank],
-                           np.argsort(second, kind="stable")[: params.horizon_rerank]])
-    moved, rescored = local_rescore(search.terrain, poses[pick], search.intrinsics(fov_i), search.height, search.sky,
-                                    search.weights, params.rerank_half_m, params.rerank_grid, params.verify_stride,
-                                    params.score)
+    pick, moved, rescored = rerank_far_horizon(search.terrain, poses, score, second, search.intrinsics(fov_i),
+                                               search.height, search.sky, search.weights, params)
     search.stats.verified += len(pick) * params.rerank_grid ** 2
     return moved, rescored, second[pick]
+
+
+def rerank_far_horizon(terrain, poses: np.ndarray, score: np.ndarray, second: np.ndarray, intrinsics, height: float,
+                       sky: np.ndarray, weights: np.ndarray, params: LocalizeParams):
+    """The best ``params.horizon_rerank`` poses by each ranking (``score``, ``second``), each moved
+    to the best of a grid around it (:func:`local_rescore`): (their indices, moved poses, scores)."""
+    k = params.horizon_rerank
+    pick = np.unique(np.r_[np.argsort(score, kind="stable")[:k], np.argsort(second, kind="stable")[:k]])
+    moved, rescored = local_rescore(terrain, poses[pick], intrinsics, height, sky, weights, params.rerank_half_m,
+                                    params.rerank_grid, params.verify_stride, params.score)
+    return pick, moved, rescored
 
 
 def _screen_chunk(search: _Search, chunk: Hypotheses, fov_i: float) -> None:

@@ -144,11 +144,12 @@ def _sees_all(terrain: Terrain, centres: np.ndarray, points: np.ndarray) -> np.n
 
 
 def _box_offsets(pose: np.ndarray, along_m: float, across_m: float, n_along: int, n_across: int) -> np.ndarray:
-    """(n, 2) world offsets (m) on a grid aligned with the pose's viewing direction (pan)."""
+    """(..., n, 2) world offsets (m) on a grid aligned with each pose's viewing direction (pan),
+    for one pose (6,) or many (P, 6)."""
     ga, gc = np.meshgrid(np.linspace(-along_m, along_m, n_along), np.linspace(-across_m, across_m, n_across))
     ga, gc = ga.ravel(), gc.ravel()
-    pan = np.radians(pose[3])
-    return np.column_stack([ga * np.sin(pan) + gc * np.cos(pan), ga * np.cos(pan) - gc * np.sin(pan)])
+    pan = np.radians(np.asarray(pose, np.float64)[..., 3])[..., None]
+    return np.stack([ga * np.sin(pan) + gc * np.cos(pan), ga * np.cos(pan) - gc * np.sin(pan)], axis=-1)
 
 
 def realigned(poses: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray, f_px: float) -> np.ndarray:
@@ -179,13 +180,8 @@ def local_rescore(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, h
     P = len(poses)
     if P == 0:
         return poses.copy(), np.zeros(0)
-    g = np.linspace(-half_m, half_m, n)
-    along, across = (a.ravel() for a in np.meshgrid(g, g))
-    pan = np.radians(poses[:, 3])[:, None]
-    x = poses[:, :1] + along * np.sin(pan) + across * np.cos(pan)
-    y = poses[:, 1:2] + along * np.cos(pan) - across * np.sin(pan)
-    grid = np.column_stack([camera_centres(terrain.dem, np.stack([x.ravel(), y.ravel()], 1), height),
-                            np.repeat(poses[:, 3:], len(along), axis=0)])
+    xy = (poses[:, None, :2] + _box_offsets(poses, half_m, half_m, n, n)).reshape(-1, 2)
+    grid = np.column_stack([camera_centres(terrain.dem, xy, height), np.repeat(poses[:, 3:], n * n, axis=0)])
     ok = np.isfinite(grid[:, 2])
     score = np.full(len(grid), np.inf)
     if ok.any():
@@ -193,9 +189,9 @@ def local_rescore(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, h
         s, _, a, b, c = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols], params=params)
         score[ok] = s
         grid[ok] = realigned(grid[ok], a, b, c, intrinsics.f_px)
-    score = score.reshape(P, len(along))
+    score = score.reshape(P, n * n)
     best = np.argmin(score, axis=1)
-    pick = np.arange(P) * len(along) + best
+    pick = np.arange(P) * n * n + best
     out = np.where(np.isfinite(score[np.arange(P), best])[:, None], grid[pick], poses)
     return out, score[np.arange(P), best]
 
