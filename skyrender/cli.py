@@ -225,7 +225,8 @@ def model(
     if json_out:
         emit_json({"model": str(out), "features": len(built.features), "major": int(built.features.major.sum()),
                    "k": k, "viewpoints": built.covisibility.n_viewpoints, "rows": rows, "cols": cols,
-                   "cell_size": terrain_dem.cell_size[0], "crs": terrain_dem.crs, "seconds": seconds})
+                   "cell_size": terrain_dem.cell_size[0], "crs": terrain_dem.crs, "seconds": seconds,
+                   "stage_seconds": built.stage_seconds})
     else:
         typer.echo(built.summary())
         typer.echo(f"wrote {out} in {seconds:.1f} s (DEM load included)")

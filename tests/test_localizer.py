@@ -13,6 +13,7 @@ from skyrender.dem.synthetic import fractal_terrain
 from skyrender.localizer import LocalizeParams, localize
 from skyrender.localizer.constraints import segments_in_sky, skyline_limit
 from skyrender.localizer.hypotheses import PERMUTATIONS, generate_hypotheses, image_triples, model_triples
+from skyrender.localizer.pipeline import search_stalled
 from skyrender.localizer.pose_solver import resection_2d, rotations_from_bearings, solve_poses
 from skyrender.localizer.refinement import local_rescore, refine_pose, resection_sweep
 from skyrender.localizer.verification import ScoreParams, align_skylines, score_skylines, trust_of_distance
@@ -563,6 +564,32 @@ def test_abstains_on_terrain_that_is_not_in_the_model(scene, views):
     pose = sample_views(other_terrain, other_model, K, 1, seed=4).poses[0]
     result = localize(_photo(other_terrain, pose), model, 2.0, 60.0)
     assert not result.localized and result.hypotheses > 100_000
+    # the search's trace: one entry a chunk; it ended early only where the stop rule says so
+    params, rounds = LocalizeParams(), result.stats.rounds
+    assert [r["evaluated"] for r in rounds] == sorted({r["evaluated"] for r in rounds})
+    assert len(rounds) == -(-result.hypotheses // params.chunk)
+    if result.hypotheses < params.max_hypotheses:
+        assert search_stalled(rounds, params.stall_chunks, params.stall_gain)
+        assert not search_stalled(rounds[:-1], params.stall_chunks, params.stall_gain)
+
+
+def test_the_stop_rule_waits_for_stall_chunks_without_a_gain():
+    """The search stops when the last ``stall_chunks`` chunks bettered none of the three
+    best scores by ``stall_gain``; any one of them doing so keeps it going."""
+    def trace(verified, trusted=None, refined=None):
+        n = len(verified)
+        return [{"best_verified": v, "best_trusted": t, "best_refined": r, "accepted": False}
+                for v, t, r in zip(verified, trusted or [1.0] * n, refined or [2.0] * n)]
+
+    flat = trace([3.0] * 9)
+    assert not search_stalled(flat[:8], 8, 0.05)  # too few chunks to judge
+    assert search_stalled(flat, 8, 0.05)
+    assert not search_stalled(flat, 0, 0.05)  # 0: the rule is off
+    assert search_stalled(trace([3.0] * 8 + [2.9]), 8, 0.05)  # 3 %: not a gain
+    assert not search_stalled(trace([3.0] * 8 + [2.8]), 8, 0.05)
+    assert not search_stalled(trace([3.0] * 9, trusted=[1.0] * 8 + [0.9]), 8, 0.05)
+    assert not search_stalled(trace([3.0] * 9, refined=[None] * 9), 8, 0.05)  # nothing refined yet
+    assert not search_stalled(trace([3.0] * 9, refined=[None] * 8 + [5.0]), 8, 0.05)  # a first refinement
 
 
 @pytest.mark.parametrize("swing", [-10.0, 10.0])

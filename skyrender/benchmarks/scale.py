@@ -4,8 +4,8 @@ Every figure is one ``skyrender`` command run in its own process, the way a user
 ``skyrender model DEM --out M`` (seconds and peak RSS of the build, DEM load included) and
 ``skyrender localize PHOTO --model M --height 2 --fov F --preset render --json`` per view
 (the command's own ``seconds``, skyline extraction included; the process's wall seconds,
-model and terrain loading included; its peak RSS). Peak RSS is the child's own
-(``os.wait4``), so rows do not mix.
+model and terrain loading included; its peak RSS). Peak RSS is the command's own
+(``os.wait4`` in a small launcher process: see :data:`LAUNCHER`), so rows do not mix.
 
 Rows (issue 22's table):
 
@@ -59,19 +59,35 @@ GOALS = {
 }
 
 
+#: Runs a command and writes its exit status and peak RSS to a file. The benchmark's own process
+#: holds the rendered views' DEM and model; a child forked from it inherits that high-water mark
+#: (Linux keeps ``ru_maxrss`` across exec), so each command is started from this small launcher.
+LAUNCHER = ("import json, os, subprocess, sys; p = subprocess.Popen(sys.argv[2:]); _, s, u = os.wait4(p.pid, 0); "
+            "json.dump({'status': os.waitstatus_to_exitcode(s), 'maxrss_kb': u.ru_maxrss}, open(sys.argv[1], 'w'))")
+
+
 def run_measured(args: list[str], timeout: float = 3600.0) -> dict:
-    """Run a command; its wall seconds, peak RSS (GB, the child's own), exit status and stdout."""
+    """Run a command; its wall seconds, peak RSS (GB, the command's own: started from
+    :data:`LAUNCHER`), exit status, stdout and stderr."""
     t = time.perf_counter()
-    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
-        proc = subprocess.Popen(args, stdout=out, stderr=err)
-        _, status, usage = os.wait4(proc.pid, 0)
-        proc.returncode = os.waitstatus_to_exitcode(status)
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err, \
+            tempfile.NamedTemporaryFile("r", suffix=".json") as usage:
+        subprocess.run([sys.executable, "-c", LAUNCHER, usage.name, *args], stdout=out, stderr=err, timeout=timeout)
         wall = time.perf_counter() - t
+        measured = json.load(usage)
         out.seek(0)
         err.seek(0)
         stdout, stderr = out.read().decode(), err.read().decode()
-    return {"wall_s": wall, "peak_gb": usage.ru_maxrss / 1e6, "status": proc.returncode, "stdout": stdout,
-            "stderr": stderr[-2000:]}
+    return {"wall_s": wall, "peak_gb": measured["maxrss_kb"] / 1e6, "status": measured["status"], "stdout": stdout,
+            "stderr": stderr}
+
+
+def stats_line(stderr: str) -> dict:
+    """The ``stats: {...}`` line ``skyrender localize --stats`` prints on stderr ({} if none)."""
+    for line in stderr.splitlines():
+        if line.startswith("stats: "):
+            return json.loads(line[len("stats: "):])
+    return {}
 
 
 def skyrender_command(*args: str) -> list[str]:
@@ -83,8 +99,9 @@ def build(dem: str, out: str) -> dict:
     """``skyrender model DEM --out OUT``: build seconds (the command's own, DEM load included), peak RSS."""
     r = run_measured(skyrender_command("model", dem, "--out", out, "--json", "--no-progress"))
     if r["status"] != 0:
-        raise RuntimeError(f"skyrender model {dem} failed: {r['stderr']}")
-    return {"seconds": json.loads(r["stdout"])["seconds"], "wall_s": r["wall_s"], "peak_gb": r["peak_gb"]}
+        raise RuntimeError(f"skyrender model {dem} failed: {r['stderr'][-2000:]}")
+    d = json.loads(r["stdout"])
+    return {"seconds": d["seconds"], "wall_s": r["wall_s"], "peak_gb": r["peak_gb"], "stage_seconds": d["stage_seconds"]}
 
 
 def write_one_arc_second_tile(hgt: str, out: str) -> str:
@@ -142,15 +159,18 @@ def localize_views(views: list[dict], model_dir: str) -> list[dict]:
     rows = []
     for v in views:
         r = run_measured(skyrender_command("localize", v["photo"], "--model", model_dir, "--height", "2",
-                                           "--fov", f"{v['fov']:.4f}", "--preset", "render", "--json"))
-        row = {"fov": v["fov"], "wall_s": r["wall_s"], "peak_gb": r["peak_gb"], "exit": r["status"]}
+                                           "--fov", f"{v['fov']:.4f}", "--preset", "render", "--json", "--stats"))
+        stats = stats_line(r["stderr"])
+        row = {"fov": v["fov"], "wall_s": r["wall_s"], "peak_gb": r["peak_gb"], "exit": r["status"],
+               "stage_seconds": stats.get("seconds", {}), "stage_peak_mb": stats.get("peak_mb", {}),
+               "hypotheses": stats.get("evaluated")}
         if r["status"] in (0, 3):
             d = json.loads(r["stdout"])
             row.update(seconds=d["seconds"], status=d["status"])
             row["error_m"] = (float(np.hypot(d["x"] - v["pose"][0], d["y"] - v["pose"][1]))
                               if d["status"] == "localized" else None)
         else:
-            row.update(seconds=None, status="error", error_m=None, stderr=r["stderr"])
+            row.update(seconds=None, status="error", error_m=None, stderr=r["stderr"][-2000:])
         rows.append(row)
         error = "-" if row["error_m"] is None else f"{row['error_m']:.0f} m"
         seconds = float("nan") if row["seconds"] is None else row["seconds"]
@@ -164,8 +184,10 @@ def summarize(rows: list[dict]) -> dict:
     secs = np.array([r["seconds"] if r["seconds"] is not None else np.nan for r in rows], np.float64)
     wall = np.array([r["wall_s"] for r in rows])
     err = np.array([r["error_m"] if r["error_m"] is not None else np.nan for r in rows], np.float64)
+    stages = sorted({k for r in rows for k in r.get("stage_seconds", {})})
+    stage_median = {k: round(float(np.median([r.get("stage_seconds", {}).get(k, 0.0) for r in rows])), 2) for k in stages}
     return {"views": len(rows), "seconds_median": float(np.nanmedian(secs)), "seconds_max": float(np.nanmax(secs)),
-            "wall_median": float(np.median(wall)), "wall_max": float(wall.max()),
+            "stage_seconds_median": stage_median, "wall_median": float(np.median(wall)), "wall_max": float(wall.max()),
             "peak_gb": float(max(r["peak_gb"] for r in rows)), "localized": int(np.isfinite(err).sum()),
             "within_200m": int((err <= RIGHT_M).sum()), "errors_m": [None if not np.isfinite(e) else float(e) for e in err]}
 
@@ -199,12 +221,16 @@ def main(argv=None) -> int:
                 os.makedirs(os.path.join(tmp, name), exist_ok=True)
                 views = render_views(dem, model_dir, n, fovs, size, os.path.join(tmp, name), args.seed)
             print(f"{name}: localizing {len(views)} views", flush=True)
-            s = summarize(localize_views(views, model_dir))
-            figures[name] = {"model": b, "localize": s}
+            per_view = localize_views(views, model_dir)
+            s = summarize(per_view)
+            figures[name] = {"model": b, "localize": s, "views": per_view}
             report(name, f"model {b['seconds']:.1f} s, {b['peak_gb']:.2f} GB; localize median {s['seconds_median']:.1f} s "
                          f"(wall {s['wall_median']:.1f} s), max {s['seconds_max']:.1f} s (wall {s['wall_max']:.1f} s), "
                          f"peak {s['peak_gb']:.2f} GB; localized {s['localized']}/{s['views']}, within 200 m "
                          f"{s['within_200m']}")
+            report("", "  model seconds by stage: " + ", ".join(f"{k} {v:.1f}" for k, v in b["stage_seconds"].items()))
+            report("", "  localize median seconds by stage: " + ", ".join(
+                f"{k} {v:.1f}" for k, v in sorted(s["stage_seconds_median"].items(), key=lambda kv: -kv[1]) if v >= 0.05))
             return views
 
         if "synthetic" in args.rows:

@@ -37,20 +37,29 @@ def build_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None, 
     if params.k < 2:
         raise InputError(f"k must be at least 2 (a pivot and two neighbours make a triple), got {params.k}")
     t0 = time.perf_counter()
+    seconds = {}
     features = find_peaks(dem, params.peaks)
     if len(features) == 0 or not features.major.any():
         raise InputError(f"{dem.name}: no peaks found (a flat or featureless DEM, or radii larger than the DEM)")
     pivots = features.subset(features.major)
     neighbours = k_nearest_features(pivots.xyz[:, :2], features.xyz[:, :2], pivots.id, params.k)
+    seconds["peaks"] = time.perf_counter() - t0
+    tick = time.perf_counter()
     factor = params.render_factor(min(dem.cell_size))
     if factor > 1:  # a fine DEM: the model's statistics need no 26 m mesh (build time and memory)
         keep = {} if terrain is None else {"curvature": terrain.curvature, "variant": terrain.variant}
         terrain = Terrain(dem.coarsened(factor), **keep)
     terrain = terrain or Terrain(dem)
+    seconds["terrain"] = time.perf_counter() - tick
+    tick = time.perf_counter()
     covis = learn_covisibility(terrain, features.xyz, params.covisibility, progress=progress)
+    seconds["covisibility"] = time.perf_counter() - tick
+    tick = time.perf_counter()
     # the horizons' centres stand on the DEM itself: the localizer places its cameras there
     horizons = build_horizons(terrain, params.horizons, grid_dem=dem)
-    return Model(dem, params, features, neighbours, covis, horizons, time.perf_counter() - t0)
+    seconds["horizons"] = time.perf_counter() - tick
+    return Model(dem, params, features, neighbours, covis, horizons, time.perf_counter() - t0,
+                 {k: round(v, 2) for k, v in seconds.items()})
 
 
 def model_cache_dir() -> Path:

@@ -75,6 +75,7 @@ class Model:
     covisibility: Covisibility
     horizons: Horizons
     build_seconds: float = 0.0
+    stage_seconds: dict = field(default_factory=dict)  # of the build (not saved): peaks, covisibility, horizons...
 
     @property
     def pivots(self) -> np.ndarray:
