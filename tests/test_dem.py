@@ -162,6 +162,28 @@ def test_a_32767_spike_is_repaired_and_reported(tmp_path):
     assert dem.elevation[20, 21] == pytest.approx(500 + 20 + 21, abs=2)
 
 
+def test_spikes_are_the_cells_far_from_their_5x5_median():
+    """find_spikes takes the median only where a cell stands far enough above its window's
+    minimum (or below its maximum): the same cells as a full 5 x 5 median filter, on rough
+    terrain with spikes and pits in the interior, on the edges and in a corner."""
+    from scipy import ndimage
+
+    from skyrender.dem.repair import find_spikes, spike_threshold_m
+
+    rng = np.random.default_rng(5)
+    z = ndimage.gaussian_filter(rng.normal(0.0, 400.0, (120, 90)), 2.0) * 3.0 + 2000.0
+    cells = rng.integers(0, z.size, 300)
+    z.flat[cells] += rng.choice([-900.0, -400.0, 250.0, 700.0], len(cells))
+    z[0, :7] += 800.0
+    z[-2:, -2:] -= 1200.0
+    valid = np.ones(z.shape, bool)
+    threshold = spike_threshold_m(30.0)
+    residual = z - ndimage.median_filter(z, size=5, mode="nearest")
+    expected = (residual > threshold) | (residual < -2.0 * threshold)
+    assert 100 < expected.sum() < 300
+    np.testing.assert_array_equal(find_spikes(z, 30.0, valid), expected)
+
+
 @pytest.mark.parametrize("content", [b"hello, I am not a DEM\n", b""])
 def test_a_text_file_is_not_a_dem(tmp_path, content):
     path = tmp_path / "dem.tif"

@@ -257,6 +257,32 @@ def test_far_horizons_equal_a_march_over_the_dem(view_terrain):
         assert np.median(err) < 0.05 and np.percentile(err, 90) < 0.25
 
 
+def test_the_ground_under_a_point_is_the_mesh_surface_an_upward_ray_meets(view_terrain):
+    """``surface_z`` (the far horizons' "does a ray start under the ground") against rays cast
+    straight up through the mesh from 2 cm below and 20 cm above its surface, and beside the
+    DEM; within ``GROUND_MARGIN_M`` above it a point counts as under it."""
+    from skyrender.render.terrain import GROUND_MARGIN_M, NumpyOps, surface_z
+
+    rng = np.random.default_rng(3)
+    x0, y0, dx, dy, cols, rows = view_terrain.grid
+    n = 20_000
+    cf, rf = rng.uniform(-0.1, 1.1, n) * cols, rng.uniform(-0.1, 1.1, n) * rows
+    cf[:2000] = np.round(np.clip(cf[:2000], 1, cols - 2))  # on inner quad edges and vertices too
+    x, y = x0 + cf * dx, y0 - rf * dy
+    z = view_terrain.vertices[:, 2]
+    height, over = surface_z(x, y, view_terrain.grid, z, NumpyOps)
+    assert (over == ((cf >= 0) & (cf <= cols - 1) & (rf >= 0) & (rf <= rows - 1))).all()
+    assert 0.6 < over.mean() < 0.8
+    height = np.where(over, height, z.min())  # beside the DEM: at its lowest height
+    for offset in (-0.02, 2.0 * GROUND_MARGIN_M):
+        points = np.stack([x, y, height + offset], axis=1)
+        upward = view_terrain.mesh_ray_test(points, np.tile([0.0, 0.0, 1.0], (n, 1)))
+        assert (upward == (over & (offset < 0))).all()
+        assert (view_terrain.mesh_under_ground(points) == upward).all()
+    just_above = np.stack([x, y, height + 0.5 * GROUND_MARGIN_M], axis=1)
+    assert (view_terrain.mesh_under_ground(just_above) == over).all()
+
+
 def test_the_exported_mesh_loads_in_trimesh_and_its_mitsuba_xml_renders_the_same_terrain(tmp_path):
     """``skyrender mesh``: the PLY is the renderer's mesh (trimesh reads it back), and the
     Mitsuba scene XML written beside it, loaded as it is, gives the same ray hits as the

@@ -50,9 +50,8 @@ from ..localizer.pose_solver import (
 )
 from ..model import build_model, load_model, save_model
 from ..render import Terrain, render_skylines
-from ..render.photo import Look, render_photo
 from . import write_figures
-from .views import sample_views
+from .views import BENCH_FOV_DEG, bench_localize_views
 
 #: A localization counts as wrong (not merely imprecise) beyond this position error.
 WRONG_M = 100.0
@@ -129,10 +128,9 @@ def main(argv=None) -> int:
         t = time.perf_counter()
         load_model(os.path.join(tmp, "model"), dem=dem)
         load_s = time.perf_counter() - t
-    intr = Intrinsics.from_fov(60.0, 640, 480)
+    intr, sample, photos = bench_localize_views(terrain, model, args.views, args.seed)
     print(f"{dem.describe()}\n{model.summary()}; ready in {build_s:.1f} s ({terrain.variant}, {os.cpu_count()} cores); "
           f"loading the saved model (DEM apart): {load_s:.2f} s")
-    sample = sample_views(terrain, model, intr, args.views, seed=args.seed)
     print(f"{len(sample.poses)} views (camera 2 m up, turned towards a pivot on its skyline 2-15 km away, "
           f">= 3 of the 8 largest skyline peaks on model peaks): {sample.drawn} random views drawn to find them")
 
@@ -145,12 +143,11 @@ def main(argv=None) -> int:
     rows = {name: [] for name in configs}
     print("\nseconds: photo in, pose out (skyline extraction included)")
     print(f"{'view':>4} | " + " | ".join(f"{n:^28}" for n in configs))
-    for i, (pose, target) in enumerate(zip(sample.poses, sample.targets)):
-        photo = render_photo(terrain, pose, intr, Look(seed=i))
+    for i, (pose, target, photo) in enumerate(zip(sample.poses, sample.targets, photos)):
         cells = []
         for name, (prior, ordered) in configs.items():
             p = None if prior is None else {"ids": [int(model.features.id[target])]}
-            r = localize(photo.image, model, 2.0, 60.0, p, terrain=terrain,
+            r = localize(photo, model, 2.0, BENCH_FOV_DEG, p, terrain=terrain,
                          params=replace(LocalizeParams(), ordered=ordered))
             d_pos, d_ang = _errors(r, pose.array()) if r.localized else (np.nan, np.nan)
             rows[name].append({"view": i, "seconds": r.seconds, "position_error_m": d_pos, "orientation_error_deg": d_ang,

@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -72,7 +73,15 @@ def run_measured(args: list[str], timeout: float = 3600.0) -> dict:
     t = time.perf_counter()
     with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err, \
             tempfile.NamedTemporaryFile("r", suffix=".json") as usage:
-        subprocess.run([sys.executable, "-c", LAUNCHER, usage.name, *args], stdout=out, stderr=err, timeout=timeout)
+        # its own process group, so that a timeout stops the command too, not only the launcher
+        launcher = subprocess.Popen([sys.executable, "-c", LAUNCHER, usage.name, *args], stdout=out, stderr=err,
+                                    start_new_session=True)
+        try:
+            launcher.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(launcher.pid, signal.SIGKILL)
+            launcher.wait()
+            raise
         wall = time.perf_counter() - t
         measured = json.load(usage)
         out.seek(0)

@@ -83,3 +83,19 @@ def sample_views(terrain: Terrain, model: Model, intrinsics: Intrinsics, n: int,
             poses.append(pose)
             targets.append(int(t))
     return ViewSample(poses, targets, drawn)
+
+
+#: ``make bench-localize``'s camera: 60 deg wide, 640 x 480 px.
+BENCH_FOV_DEG, BENCH_SIZE = 60.0, (640, 480)
+
+
+def bench_localize_views(terrain: Terrain, model: Model, n: int, seed: int):
+    """``make bench-localize``'s views on ``terrain`` and its ``model``: ``n`` cameras of
+    :data:`BENCH_FOV_DEG` and :data:`BENCH_SIZE` (:func:`sample_views`), and view i's rendered
+    photo (``Look(seed=i)``). Returns (intrinsics, the ViewSample, the photos (H, W, 3) uint8)."""
+    from ..render.photo import Look, render_photo
+
+    intrinsics = Intrinsics.from_fov(BENCH_FOV_DEG, *BENCH_SIZE)
+    sample = sample_views(terrain, model, intrinsics, n, seed=seed)
+    photos = [render_photo(terrain, pose, intrinsics, Look(seed=i)).image for i, pose in enumerate(sample.poses)]
+    return intrinsics, sample, photos

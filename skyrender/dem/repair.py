@@ -30,9 +30,18 @@ def find_spikes(z: np.ndarray, cell_size_m: float, valid: np.ndarray) -> np.ndar
     5 x 5 neighbourhood median. Pits get the laxer test because narrow real
     gorges are deep at 90 m cells, and a pit never makes a phantom ridge."""
     filled = _fill(z, valid)
-    residual = filled - ndimage.median_filter(filled, size=5, mode="nearest")
     threshold = spike_threshold_m(cell_size_m)
-    return valid & ((residual > threshold) | (residual < -2.0 * threshold))
+    # The median lies between the window's minimum and maximum, so only cells that far above
+    # their window's minimum (or below its maximum) can be spikes (pits): the median is taken
+    # there alone, the same as ``ndimage.median_filter(size=5, mode="nearest")`` but ~30x faster.
+    candidate = ((filled - ndimage.minimum_filter(filled, size=5, mode="nearest") > threshold)
+                 | (filled - ndimage.maximum_filter(filled, size=5, mode="nearest") < -2.0 * threshold))
+    rows, cols = np.nonzero(candidate)
+    windows = np.lib.stride_tricks.sliding_window_view(np.pad(filled, 2, mode="edge"), (5, 5))
+    residual = filled[rows, cols] - np.median(windows[rows, cols].reshape(len(rows), 25), axis=1)
+    spikes = np.zeros(z.shape, bool)
+    spikes[rows, cols] = (residual > threshold) | (residual < -2.0 * threshold)
+    return valid & spikes
 
 
 def _fill(z: np.ndarray, valid: np.ndarray) -> np.ndarray:

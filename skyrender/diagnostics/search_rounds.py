@@ -77,20 +77,16 @@ def tile_views(n: int, seed: int, tmp: str):
 
 def synthetic_views(n: int, seed: int):
     """``make bench-localize``'s model, terrain and views (seed 1 there)."""
-    from ..benchmarks.views import sample_views
-    from ..camera import Intrinsics
+    from ..benchmarks.views import BENCH_FOV_DEG, bench_localize_views
     from ..dem.synthetic import fractal_terrain
     from ..model import build_model
     from ..render import Terrain
-    from ..render.photo import Look, render_photo
 
     dem = fractal_terrain()
     terrain = Terrain(dem)
     model = build_model(dem, terrain=terrain)
-    intr = Intrinsics.from_fov(60.0, 640, 480)
-    sample = sample_views(terrain, model, intr, n, seed=seed)
-    return model, terrain, [(render_photo(terrain, pose, intr, Look(seed=i)).image, 60.0, pose.array())
-                            for i, pose in enumerate(sample.poses)]
+    _, sample, photos = bench_localize_views(terrain, model, n, seed)
+    return model, terrain, [(photo, BENCH_FOV_DEG, pose.array()) for photo, pose in zip(photos, sample.poses)]
 
 
 def main(argv=None) -> int:

@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from ..camera import Intrinsics, as_pose_array, pixel_ray_basis
-from .terrain import Terrain
+from .terrain import GROUND_MARGIN_M, Terrain, surface_z
 
 #: Threads per kernel launch (poses x columns); bounds memory for huge batches.
 MAX_THREADS_PER_LAUNCH = 4_000_000
@@ -101,7 +101,7 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
         _frozen_bisect = dr.freeze(_bisect_columns, warn_after=64)  # one recording per image size and mode
     result = _frozen_bisect(terrain.scene, mi.Float(basis.astype(np.float32).ravel()),
                             dr.arange(mi.UInt32, P * W), mi.Float(terrain.max_distance), W, H, subpixel, n_iter,
-                            with_distance, near_m > 0, mi.Float(near_m))
+                            with_distance, near_m > 0, mi.Float(near_m), terrain.ground, mi.Float(terrain.grid))
     if with_distance:
         return tuple(np.array(r, dtype=np.float64).reshape(P, W) for r in result)
     return np.array(result, dtype=np.float64).reshape(P, W)
@@ -110,11 +110,43 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
 _frozen_bisect = None
 
 
+class _DrJitOps:
+    """:func:`~skyrender.render.terrain.surface_z`'s operations inside a Dr.Jit kernel."""
+
+    @staticmethod
+    def floor(a):
+        import drjit as dr
+        return dr.floor(a)
+
+    @staticmethod
+    def clip(a, lo, hi):
+        import drjit as dr
+        return dr.clip(a, lo, hi)
+
+    @staticmethod
+    def select(mask, a, b):
+        import drjit as dr
+        return dr.select(mask, a, b)
+
+    @staticmethod
+    def gather(z, index, active):
+        import drjit as dr
+        import mitsuba as mi
+        return dr.gather(mi.Float, z, index, active)
+
+    @staticmethod
+    def index(a):
+        import mitsuba as mi
+        return mi.UInt32(a)
+
+
 def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_iter: int, with_distance: bool = False,
-                    near_clip: bool = False, near=None):
+                    near_clip: bool = False, near=None, ground=None, grid=None):
     """One Dr.Jit kernel: thread = (pose, column); a symbolic loop bisects v; with
     ``with_distance`` one more ray, on the terrain side of the boundary, measures its distance;
-    with ``near_clip`` rays start ``near`` metres out (and one starting under the ground hits).
+    with ``near_clip`` rays start ``near`` metres out (and one starting under the ground hits:
+    ``ground`` and ``grid`` are the mesh's vertex heights and grid, for
+    :func:`~skyrender.render.terrain.surface_z`).
 
     ``buf`` holds 12 floats per pose (mesh-space origin and the ray basis d0, du, dv);
     ``idx`` enumerates pose * W + column. Frozen by ``dr.freeze``: the Python tracing of
@@ -141,10 +173,15 @@ def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_ite
             return mi.Ray3f(o + near * d, d, maxt, 0.0, [])
         return mi.Ray3f(o, d, maxt, 0.0, [])
 
+    if near_clip:
+        grid = [dr.gather(mi.Float, grid, k) for k in range(6)]
+
     def hits(v):
         r = ray(v)
         if near_clip:  # a start under the ground: the terrain there rises above the ray
-            return scene.ray_test(r) | scene.ray_test(mi.Ray3f(r.o, mi.Vector3f(0.0, 0.0, 1.0), maxt, 0.0, []))
+            hit = scene.ray_test(r)
+            height, inside = surface_z(r.o.x, r.o.y, grid, ground, _DrJitOps, active=~hit)  # loads only where needed
+            return hit | (inside & (r.o.z < height + GROUND_MARGIN_M))
         return scene.ray_test(r)
 
     def with_distance_of(v, v_terrain):
@@ -197,7 +234,7 @@ def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
         d = unit(v)
         if near_m > 0:
             start = o + near_m * d
-            return ray_test(start, d) | ray_test(start, np.broadcast_to([0.0, 0.0, 1.0], d.shape))
+            return ray_test(start, d) | terrain.mesh_under_ground(start)
         return ray_test(o, d)
 
     def with_distance_of(v, v_terrain):

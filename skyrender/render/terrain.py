@@ -45,6 +45,53 @@ def terrain_mesh_arrays(dem: DEM, origin_xy, c: float) -> tuple[np.ndarray, np.n
     return vertices, faces
 
 
+#: A point this close above the surface counts as under it (m): float32 rounding of the
+#: surface height (millimetres) must not let a ray that starts on a slope it runs along
+#: escape as sky — at the bottom row of a column that would turn the whole column to sky.
+GROUND_MARGIN_M = 0.02
+
+
+def surface_z(x, y, grid, z, ops, active=True):
+    """Height z of the mesh surface (mesh space: local, lowered) above points (x, y), exactly as
+    the two triangles of each quad interpolate it, and whether (x, y) lies over the mesh at all.
+
+    ``grid`` = (x0, y0, dx, dy, cols, rows): the first vertex (north-west) and the spacing (m;
+    rows run south); ``z`` the vertices' z in row order. ``ops`` supplies ``floor``, ``clip``,
+    ``select``, ``gather(z, index, active)`` and ``index(a)`` (to integers), so the same formula
+    serves numpy arrays and a Dr.Jit kernel (where ``active`` masks the loads). It answers "does
+    a ray start under the ground" with four loads and a few multiplies instead of a second ray
+    traced upwards: a fifth of the far horizons' time. Float32 rounding makes it uncertain
+    within millimetres of the surface, hence :data:`GROUND_MARGIN_M`."""
+    x0, y0, dx, dy, cols, rows = grid
+    cf, rf = (x - x0) / dx, (y0 - y) / dy
+    inside = (cf >= 0.0) & (cf <= cols - 1.0) & (rf >= 0.0) & (rf <= rows - 1.0)
+    c = ops.clip(ops.floor(cf), 0.0, cols - 2.0)
+    r = ops.clip(ops.floor(rf), 0.0, rows - 2.0)
+    u, s = cf - c, 1.0 - (rf - r)  # east and north fractions within the quad
+    stride = ops.index(cols)
+    nw = ops.index(r) * stride + ops.index(c)  # integer: a 2 x 2 mosaic of 1-arc-second tiles passes 2**24
+    z_nw, z_ne = ops.gather(z, nw, active), ops.gather(z, nw + 1, active)
+    z_sw, z_se = ops.gather(z, nw + stride, active), ops.gather(z, nw + stride + 1, active)
+    below_diagonal = s <= u  # triangle (sw, se, ne); else (sw, ne, nw)
+    height = ops.select(below_diagonal, z_sw + u * (z_se - z_sw) + s * (z_ne - z_se),
+                        z_sw + s * (z_nw - z_sw) + u * (z_ne - z_nw))
+    return height, inside
+
+
+class NumpyOps:
+    """:func:`surface_z`'s operations on numpy arrays."""
+
+    floor, clip, select = staticmethod(np.floor), staticmethod(np.clip), staticmethod(np.where)
+
+    @staticmethod
+    def gather(z, index, active=True):
+        return z[index]
+
+    @staticmethod
+    def index(a):
+        return np.asarray(a).astype(np.int64)
+
+
 def terrain_trimesh(dem: DEM, *, world: bool = False, curvature: bool = False):
     """The DEM's terrain as a ``trimesh.Trimesh`` (metres; x east, y north, z up): the mesh
     of :func:`terrain_mesh_arrays`, local to the DEM centre (or in world coordinates), lowered
@@ -100,6 +147,22 @@ class Terrain:
         span = float(np.hypot(xmax - xmin, ymax - ymin))
         #: No ray needs to go further than this (metres): replaces the 10 km far clip.
         self.max_distance = 2.0 * span + 10_000.0
+        dx, dy = dem.cell_size
+        #: (x0, y0, dx, dy, cols, rows) of the mesh's vertex grid (local metres), for :func:`surface_z`.
+        self.grid = (float(vertices[0, 0]), float(vertices[0, 1]), dx, dy, dem.shape[1], dem.shape[0])
+
+    @property
+    def ground(self):
+        """The vertices' z as a Dr.Jit array (made once): :func:`surface_z` inside kernels."""
+        if not hasattr(self, "_ground"):
+            self._ground = self.mi.Float(self.vertices[:, 2].copy())
+        return self._ground
+
+    def mesh_under_ground(self, points) -> np.ndarray:
+        """Do mesh-space points (N, 3) lie below the terrain surface, or less than
+        :data:`GROUND_MARGIN_M` above it (over the mesh)?"""
+        height, inside = surface_z(points[:, 0], points[:, 1], self.grid, self.vertices[:, 2], NumpyOps)
+        return inside & (points[:, 2] < height + GROUND_MARGIN_M)
 
     @property
     def mesh(self):
