@@ -19,10 +19,11 @@ from skyrender.model import (
     build_model,
     find_peaks,
     k_nearest_features,
+    learn_covisibility,
     load_model,
     save_model,
 )
-from skyrender.model.covisibility import skyline_features
+from skyrender.model.covisibility import skyline_features, viewpoint_grid
 from skyrender.model.neighbours import most_covisible_features
 from skyrender.render import Terrain
 
@@ -160,6 +161,21 @@ def test_covisibility_agrees_with_brute_force_line_of_sight_and_horizon():
     print(f"co-visibility: {agree}/{checked} decisions agree")
     assert fast.any()
     assert agree / checked >= 0.99
+
+
+def test_covisibility_counts_are_the_viewpoints_where_both_features_are_skyline_features():
+    """``together[f, g]``: viewpoints where f and g both are skyline features, accumulated in
+    chunks of viewpoints (here many) as a sparse product: the dense count, exactly."""
+    dem = fractal_terrain(200, 50.0, seed=2)
+    features = find_peaks(dem).xyz
+    terrain = Terrain(dem)
+    params = CovisibilityParams(spacing=600.0)
+    learned = learn_covisibility(terrain, features, params, max_pairs=20 * len(features))
+    cameras = viewpoint_grid(dem, params.spacing, params.height)
+    sky = skyline_features(terrain, cameras, features, params).astype(np.int64)
+    assert learned.n_viewpoints == len(cameras) > 200 and sky.sum() > 100
+    assert learned.together.dtype == np.int64
+    np.testing.assert_array_equal(learned.together, sky.T @ sky)
 
 
 def test_probabilities_lie_in_unit_interval_and_the_model_round_trips(tmp_path):
