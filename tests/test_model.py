@@ -178,6 +178,21 @@ def test_covisibility_counts_are_the_viewpoints_where_both_features_are_skyline_
     np.testing.assert_array_equal(learned.together, sky.T @ sky)
 
 
+def test_pairs_in_range_are_every_pair_within_the_distances_in_row_major_order():
+    from skyrender.model.covisibility import pairs_in_range
+
+    rng = np.random.default_rng(4)
+    cameras = rng.uniform(0.0, 5000.0, (60, 3))
+    points = np.vstack([rng.uniform(0.0, 5000.0, (80, 3)), cameras[:3] + [[2000.0, 0.0, 0.0], [0.0, 200.0, 0.0],
+                                                                          [1.0, 0.0, 0.0]]])  # on both bounds
+    v, f, d = pairs_in_range(cameras, points, 200.0, 2000.0)
+    all_d = np.hypot(points[None, :, 0] - cameras[:, None, 0], points[None, :, 1] - cameras[:, None, 1])
+    expected = np.flatnonzero((all_d >= 200.0) & (all_d <= 2000.0))
+    np.testing.assert_array_equal(v * len(points) + f, expected)
+    np.testing.assert_array_equal(d, all_d.ravel()[expected])
+    assert {(0, 80), (1, 81)} <= set(zip(v.tolist(), f.tolist())) and (2, 82) not in set(zip(v.tolist(), f.tolist()))
+
+
 def test_probabilities_lie_in_unit_interval_and_the_model_round_trips(tmp_path):
     dem = fractal_terrain(300, 50.0, seed=5)
     model = build_model(dem, ModelParams(covisibility=CovisibilityParams(spacing=1500.0)))
