@@ -708,3 +708,16 @@ def test_refinement_fits_the_camera_height_within_its_bound(scene, views):
     assert 2.0 < height_of(free) <= 42.0 + 1e-6
     assert abs(height_of(free) - 25.0) < abs(height_of(fixed) - 25.0)
     assert free.score <= fixed.score
+
+
+def test_the_smallest_horizon_costs_are_a_full_sort_s_first_k_ties_by_index():
+    from skyrender.localizer.horizon_search import smallest
+
+    rng = np.random.default_rng(8)
+    cost = np.round(rng.normal(size=(500, 36)), 1).astype(np.float32)  # many ties
+    cost[rng.integers(0, 500, 20), rng.integers(0, 36, 20)] = -9.0
+    flat = cost.ravel()
+    for k in (1, 7, 200, 499, 500, 501, cost.size + 5):
+        expected = np.lexsort((np.arange(flat.size), flat))[: min(k, flat.size)]
+        np.testing.assert_array_equal(smallest(cost, k), expected)
+    assert len(smallest(cost, 0)) == 0

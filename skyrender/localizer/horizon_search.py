@@ -113,6 +113,22 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
     return cost, offset_at
 
 
+def smallest(cost: np.ndarray, k: int) -> np.ndarray:
+    """Flat indices of the ``k`` smallest entries of ``cost`` (N, B), by cost then index (so ties
+    are broken the same on every machine). The k-th smallest of the N row minima bounds them
+    (the k rows with the lowest minima hold k entries at most that high), so one comparison
+    pass leaves a few thousand candidates to sort instead of partitioning all N B entries
+    (0.28 s for a CH1 model's 20 M, per window and tilt)."""
+    k = min(k, cost.size)
+    if k == 0:
+        return np.zeros(0, np.int64)
+    row_min = cost.min(axis=1)
+    bound = np.partition(row_min, k - 1)[k - 1] if k <= len(row_min) else np.inf
+    candidates = np.flatnonzero(cost.ravel() <= bound) if np.isfinite(bound) else np.arange(cost.size)
+    flat = cost.ravel()
+    return candidates[np.lexsort((candidates, flat[candidates]))[:k]]
+
+
 def horizon_poses(horizons: Horizons, skyline: np.ndarray, weights: np.ndarray, intrinsics: Intrinsics, dem,
                   height: float, params: HorizonSearchParams = HorizonSearchParams()) -> tuple[np.ndarray, np.ndarray]:
     """Poses (K, 6) of the best (centre, azimuth) pairs of each window, camera ``height``
@@ -134,10 +150,8 @@ def horizon_poses(horizons: Horizons, skyline: np.ndarray, weights: np.ndarray, 
             if np.count_nonzero(w_win) < params.min_bins:
                 continue
             cost, offset_at = horizon_costs(spectra, n_bins, bins, elevation, w_win, horizons.bin_deg, params.terms)
+            best = smallest(cost, params.per_window)
             cost = cost.ravel()
-            k = min(params.per_window, cost.size)
-            best = np.argpartition(cost, k - 1)[:k]
-            best = best[np.argsort(cost[best])]
             flats.append(best)
             costs.append(cost[best])
             tilts.append(tilt + offset_at(best).astype(np.float64))
