@@ -122,10 +122,10 @@ def smallest(cost: np.ndarray, k: int) -> np.ndarray:
     k = min(k, cost.size)
     if k == 0:
         return np.zeros(0, np.int64)
+    flat = cost.ravel()
     row_min = cost.min(axis=1)
     bound = np.partition(row_min, k - 1)[k - 1] if k <= len(row_min) else np.inf
-    candidates = np.flatnonzero(cost.ravel() <= bound) if np.isfinite(bound) else np.arange(cost.size)
-    flat = cost.ravel()
+    candidates = np.flatnonzero(flat <= bound) if np.isfinite(bound) else np.arange(flat.size)
     return candidates[np.lexsort((candidates, flat[candidates]))[:k]]
 
 

@@ -138,4 +138,4 @@ def learn_covisibility(terrain: Terrain, features: np.ndarray, params: Covisibil
     # together = S^T S over all cameras. A camera sees tens of the F features on its skyline, so the
     # sparse product costs little where a dense one costs V F^2 (100 s for 2 x 2 tiles' 9,000 features)
     seen = sparse.vstack(seen_from, format="csr") if seen_from else sparse.csr_matrix((0, F), dtype=np.int64)
-    return Covisibility(len(cameras), (seen.T @ seen).toarray().astype(np.int64))
+    return Covisibility(len(cameras), (seen.T @ seen).toarray())  # int64 already: no F x F copy

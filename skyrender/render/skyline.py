@@ -24,6 +24,7 @@ so its Python tracing is paid once.
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -110,36 +111,6 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
 _frozen_bisect = None
 
 
-class _DrJitOps:
-    """:func:`~skyrender.render.terrain.surface_z`'s operations inside a Dr.Jit kernel."""
-
-    @staticmethod
-    def floor(a):
-        import drjit as dr
-        return dr.floor(a)
-
-    @staticmethod
-    def clip(a, lo, hi):
-        import drjit as dr
-        return dr.clip(a, lo, hi)
-
-    @staticmethod
-    def select(mask, a, b):
-        import drjit as dr
-        return dr.select(mask, a, b)
-
-    @staticmethod
-    def gather(z, index, active):
-        import drjit as dr
-        import mitsuba as mi
-        return dr.gather(mi.Float, z, index, active)
-
-    @staticmethod
-    def index(a):
-        import mitsuba as mi
-        return mi.UInt32(a)
-
-
 def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_iter: int, with_distance: bool = False,
                     near_clip: bool = False, near=None, ground=None, grid=None):
     """One Dr.Jit kernel: thread = (pose, column); a symbolic loop bisects v; with
@@ -175,12 +146,14 @@ def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_ite
 
     if near_clip:
         grid = [dr.gather(mi.Float, grid, k) for k in range(6)]
+        ops = SimpleNamespace(floor=dr.floor, clip=dr.clip, select=dr.select, index=mi.UInt32,
+                              gather=lambda z, index, active: dr.gather(mi.Float, z, index, active))
 
     def hits(v):
         r = ray(v)
         if near_clip:  # a start under the ground: the terrain there rises above the ray
             hit = scene.ray_test(r)
-            height, inside = surface_z(r.o.x, r.o.y, grid, ground, _DrJitOps, active=~hit)  # loads only where needed
+            height, inside = surface_z(r.o.x, r.o.y, grid, ground, ops, active=~hit)  # loads only where needed
             return hit | (inside & (r.o.z < height + GROUND_MARGIN_M))
         return scene.ray_test(r)
 

@@ -16,6 +16,8 @@ costs nothing per ray: see :meth:`Terrain.to_mesh_space`.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 
 from ..backend import is_jit, mitsuba
@@ -78,18 +80,9 @@ def surface_z(x, y, grid, z, ops, active=True):
     return height, inside
 
 
-class NumpyOps:
-    """:func:`surface_z`'s operations on numpy arrays."""
-
-    floor, clip, select = staticmethod(np.floor), staticmethod(np.clip), staticmethod(np.where)
-
-    @staticmethod
-    def gather(z, index, active=True):
-        return z[index]
-
-    @staticmethod
-    def index(a):
-        return np.asarray(a).astype(np.int64)
+#: :func:`surface_z`'s operations on numpy arrays (the Dr.Jit kernel passes its own).
+NumpyOps = SimpleNamespace(floor=np.floor, clip=np.clip, select=np.where, gather=lambda z, index, active=True: z[index],
+                           index=lambda a: np.asarray(a).astype(np.int64))
 
 
 def terrain_trimesh(dem: DEM, *, world: bool = False, curvature: bool = False):
