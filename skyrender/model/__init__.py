@@ -79,11 +79,18 @@ def model_cache_key(dem: DEM, params: ModelParams = ModelParams()) -> str:
     return key
 
 
+#: Bumped when a change of the code (not of the parameters) changes what a model holds, so that
+#: models cached before it are rebuilt: 2 = the far horizons rendered one column per bin and
+#: with the per-shape frozen kernel (2026-12-02; before it, a cached model's horizons could hold
+#: a wrongly replayed render).
+CACHE_GENERATION = 2
+
+
 def cached_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None) -> Model:
     """The model of ``dem`` built with ``params`` from the cache (keyed by the DEM's
-    fingerprint and the parameters), built and cached on first use; an unwritable
-    cache only costs the rebuild next time."""
-    cache = model_cache_dir() / model_cache_key(dem, params)
+    fingerprint and the parameters, under ``g<CACHE_GENERATION>``), built and cached on first
+    use; an unwritable cache only costs the rebuild next time."""
+    cache = model_cache_dir() / f"g{CACHE_GENERATION}" / model_cache_key(dem, params)
     try:
         return load_model(cache, dem=dem, params=params)
     except InputError:
