@@ -283,7 +283,8 @@ def test_far_horizons_equal_a_march_over_the_dem(view_terrain):
         err = np.abs(rendered - expected)
         print(f"far horizon vs march: median {np.median(err):.3f} deg, 90th pct {np.percentile(err, 90):.3f}, "
               f"max {err.max():.3f}")
-        assert np.median(err) < 0.05 and np.percentile(err, 90) < 0.25
+        # one column per bin: medians 0.023 / 0.036 deg (the eight resampled cameras before 2026-12-02: 0.035 / 0.046)
+        assert np.median(err) < 0.04 and np.percentile(err, 90) < 0.2
 
 
 def test_skylines_without_edge_tests_bisect_to_the_same_boundary(view_terrain, valley_view):
