@@ -140,12 +140,8 @@ class LocalizeParams:
         are off (on CH1 their peaks are rarely DEM peaks; generating them took 10-30 s). The refined scores of right and
         wrong poses overlap (1.1-2.4 vs 1.1-4.0 px on CH1 training photos), but the
         margin to the best pose over 1 km away separates them, so the confidence is a
-        logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`).
-        The refinement keeps a beam of 3: on the 21 CH1 dev photos a beam of 5 cost 4 s a photo
-        (refinement 12.4 -> 16.5 s, median) and found no pose within 1 km that 3 did not
-        (``experiments/ch1/README.md``)."""
+        logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`)."""
         return cls(skyline_method="hybrid", max_hypotheses=0, final_refinements=8, max_refinements=4,
-                   refine=RefineParams(search_beam=3),
                    max_horizon_refinements=16,
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=1000.0, confidence_model="margin",
                    margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,

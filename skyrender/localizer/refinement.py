@@ -65,10 +65,7 @@ class RefineParams:
 
     search_levels: tuple = ((640.0, 160.0, 65, 9), (40.0, 40.0, 5, 5), (12.0, 12.0, 5, 5), (3.0, 3.0, 5, 5),
                             (1.0, 1.0, 5, 5), (0.3, 0.3, 5, 5))
-    # best positions of each level kept as the next level's seeds: 5, not 3, since 2026-12-02 (the score is flat
-    # along the line of sight: on the synthetic view 1 from far horizons alone two of four candidates 200-240 m
-    # off ended 34-89 m off with 3 and 1-14 m off with 5, at 1.4 x the renders)
-    search_beam: int = 5
+    search_beam: int = 3  # best positions of each level kept as the next level's seeds
     search_max_poses: int = 200  # at most this many positions per seed and level are rendered (evenly thinned)
     fine_shift_px: float = 4.0
     apex_noise_px: float = 2.0

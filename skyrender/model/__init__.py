@@ -21,7 +21,7 @@ from .neighbours import k_nearest_features
 from .peaks import PeakParams, PeakTable, find_peaks
 
 __all__ = ["build_model", "cached_model", "model_cache_key", "Model", "ModelParams", "PeakParams", "CovisibilityParams",
-           "load_model", "save_model",
+           "CACHE_GENERATION", "load_model", "save_model",
            "find_peaks", "k_nearest_features", "learn_covisibility", "PeakTable", "Covisibility", "HorizonParams",
            "Horizons", "build_horizons"]
 
@@ -80,9 +80,9 @@ def model_cache_key(dem: DEM, params: ModelParams = ModelParams()) -> str:
 
 
 #: Bumped when a change of the code (not of the parameters) changes what a model holds, so that
-#: models cached before it are rebuilt: 2 = the far horizons rendered one column per bin and
-#: with the per-shape frozen kernel (2026-12-02; before it, a cached model's horizons could hold
-#: a wrongly replayed render).
+#: models cached before it are rebuilt: 2 = far horizons rendered with the per-shape frozen
+#: kernel (2d87ab4, 2026-12-02; before it, a model built in a process that had localized could
+#: hold wrongly replayed horizons).
 CACHE_GENERATION = 2
 
 

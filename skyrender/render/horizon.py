@@ -1,64 +1,56 @@
 """Panoramic horizons: the elevation angle of the skyline all around a camera centre.
 
-One level camera per azimuth bin, one column wide, looks exactly along the bin's
-azimuth (pan j * bin deg); its column's boundary, bisected as every rendered skyline is
-(:func:`~skyrender.render.skyline.skylines_of_rays`, optionally with a near clip),
-becomes the bin's elevation. Every bin is a direct sample: nothing is rendered between
-bins and nothing resampled. (Until 2026-12-02 eight 45-degree cameras of 96 columns
-each, 2.1 x the rays, were interpolated onto the bins.) Elevation angles are apparent
-ones (earth curvature and refraction as the Terrain applies them), so they compare
-directly with a photo's skyline turned into directions.
+Eight level cameras (pan 0, 45, ..., 315 deg, 45 deg wide) render their skylines
+(:func:`~skyrender.render.skyline.render_skylines`, optionally with a near clip);
+each column's boundary becomes an (azimuth, elevation) direction, resampled onto
+azimuth bins 0, bin, 2 bin, ... deg clockwise from grid north. Elevation angles
+are apparent ones (earth curvature and refraction as the Terrain applies them),
+so they compare directly with a photo's skyline turned into directions.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from ..camera import Intrinsics, pixel_ray_basis
-from .skyline import skyline_iterations, skylines_of_rays
+from ..camera import Intrinsics
+from .skyline import render_skylines
 from .terrain import Terrain
 
-#: Rows of each bin's one-column camera, and the elevation (deg) its top and bottom rows
-#: reach; a horizon beyond that is clipped there.
+#: Level cameras per panorama and their columns (0.47 deg each at 45 deg wide).
+PANORAMA_CAMERAS = 8
+COLUMNS_PER_CAMERA = 96
+#: Rows: +-45 deg at the centre column; a horizon beyond that is clipped there.
 ROWS = 192
-MAX_ELEVATION_DEG = 40.0
-#: Columns (centres x bins) per batch: bounds the ray arrays' memory (~100 MB).
-COLUMNS_PER_BATCH = 1_000_000
-
-
-def horizon_intrinsics() -> Intrinsics:
-    """The one-column camera of every bin: ``ROWS`` rows spanning +-``MAX_ELEVATION_DEG``,
-    the column's rays through its centre (u = 0.5)."""
-    f_px = 0.5 * ROWS / math.tan(math.radians(MAX_ELEVATION_DEG))
-    return Intrinsics(1, ROWS, f_px, 0.5, 0.5 * ROWS)
 
 
 def render_horizons(terrain: Terrain, centres: np.ndarray, bin_deg: float = 0.5, near_m: float = 0.0,
-                    tol_px: float = 0.125) -> np.ndarray:
+                    tol_px: float = 0.25) -> np.ndarray:
     """(N, round(360 / bin_deg)) float32 horizon elevation angles (deg) around camera
     centres (N, 3) (world metres), ignoring terrain nearer than ``near_m`` (m).
 
-    Bin j holds azimuth j * bin_deg (deg clockwise from grid north). Each elevation is
-    bisected to ``tol_px`` rows of :func:`horizon_intrinsics` (0.125 px: 0.06 deg); a bin
-    that sees only sky gets the lowest elevation rendered (-``MAX_ELEVATION_DEG``, within that)."""
+    Bin j holds azimuth j * bin_deg (deg clockwise from grid north). A column that
+    sees only sky gets the lowest elevation rendered (-45 deg at the centre column)."""
     centres = np.atleast_2d(np.asarray(centres, np.float64))
     n_bins = int(round(360.0 / bin_deg))
-    k = horizon_intrinsics()
-    level = np.zeros((n_bins, 6))
-    level[:, 3] = np.arange(n_bins) * bin_deg
-    rays = pixel_ray_basis(level, k.array())  # the same for every centre, up to the mesh's shear
-    n_iter = skyline_iterations(k.height, True, tol_px)
-    out = np.empty((len(centres), n_bins), np.float32)
-    per_batch = max(1, COLUMNS_PER_BATCH // n_bins)
-    for start in range(0, len(centres), per_batch):
-        batch = centres[start:start + per_batch]
-        shape = (len(batch), n_bins, 3)
-        origins, vectors = terrain.to_mesh_space(np.broadcast_to(batch[:, None, :], shape),
-                                                 tuple(np.broadcast_to(r[None], shape) for r in rays))
-        # no edge tests: a bin all sky bisects to the bottom row, one all terrain to the top
-        v = skylines_of_rays(terrain, origins.reshape(-1, 3), *(r.reshape(-1, 3) for r in vectors), 1, k.height,
-                             n_iter, near_m=near_m, edge_tests=False)[:, 0]
-        out[start:start + per_batch] = np.degrees(np.arctan2(k.cy - v, k.f_px)).reshape(len(batch), n_bins)
-    return out
+    if len(centres) == 0:
+        return np.zeros((0, n_bins), np.float32)
+    k = Intrinsics.from_fov(360.0 / PANORAMA_CAMERAS, COLUMNS_PER_CAMERA, ROWS)
+    pans = np.arange(PANORAMA_CAMERAS) * 360.0 / PANORAMA_CAMERAS
+    poses = np.zeros((len(centres) * PANORAMA_CAMERAS, 6))
+    poses[:, :3] = np.repeat(centres, PANORAMA_CAMERAS, axis=0)
+    poses[:, 3] = np.tile(pans, len(centres))
+    v = render_skylines(terrain, poses, k, tol=tol_px, near_m=near_m)
+    off = np.arange(COLUMNS_PER_CAMERA) + 0.5 - k.cx
+    v = np.where(np.isnan(v), float(ROWS), v)
+    elevation = np.degrees(np.arctan2(k.cy - v, np.hypot(k.f_px, off)))
+    azimuth = (pans[:, None] + np.degrees(np.arctan(off / k.f_px))).ravel()  # the same for every centre
+    order = np.argsort(azimuth % 360.0)
+    azimuth = azimuth[order] % 360.0
+    elevation = elevation.reshape(len(centres), -1)[:, order]
+    # linear interpolation onto the bins, periodic in azimuth, for every centre at once
+    grid = np.arange(n_bins) * bin_deg
+    ext_az = np.r_[azimuth[-1] - 360.0, azimuth, azimuth[0] + 360.0]
+    j = np.clip(np.searchsorted(ext_az, grid, side="right") - 1, 0, len(ext_az) - 2)
+    w = (grid - ext_az[j]) / (ext_az[j + 1] - ext_az[j])
+    ext_el = np.concatenate([elevation[:, -1:], elevation, elevation[:, :1]], axis=1)
+    return ((1.0 - w) * ext_el[:, j] + w * ext_el[:, j + 1]).astype(np.float32)

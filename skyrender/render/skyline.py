@@ -70,41 +70,27 @@ def render_skylines(terrain: Terrain, poses, intrinsics: Intrinsics, *, subpixel
     k = intrinsics.array() if per_pose_intrinsics is None else np.asarray(per_pose_intrinsics, np.float64)
     d0, du, dv = pixel_ray_basis(pa, k)
     origins, (d0, du, dv) = terrain.to_mesh_space(pa[:, :3], (d0, du, dv))
-    result = skylines_of_rays(terrain, origins, d0, du, dv, intrinsics.width, intrinsics.height,
-                              skyline_iterations(intrinsics.height, subpixel, tol), subpixel=subpixel,
-                              with_distance=with_distance, near_m=near_m)
-    if single:
-        return tuple(r[0] for r in result) if with_distance else result[0]
-    return result
-
-
-def skylines_of_rays(terrain: Terrain, origins, d0, du, dv, W: int, H: int, n_iter: int, *, subpixel: bool = True,
-                     with_distance: bool = False, near_m: float = 0.0, edge_tests: bool = True):
-    """(P, W) skylines (v, px) of P linear ray models already in the mesh's frame
-    (:meth:`~skyrender.render.terrain.Terrain.to_mesh_space`): column i's rays are
-    ``d0 + (i + 0.5) du + v dv`` from ``origins``, each (P, 3); ``n_iter`` bisection steps
-    (:func:`skyline_iterations`). The launches hold at most ``MAX_THREADS_PER_LAUNCH`` columns.
-    With ``with_distance``, also the (P, W) distances (see :func:`render_skylines`). Without
-    ``edge_tests`` (sub-pixel mode only) the two rays at the top and bottom edges are not traced:
-    a column all sky then comes out within the tolerance of H, not NaN, one all terrain near 0."""
-    P = len(origins)
+    W, H = intrinsics.width, intrinsics.height
+    n_iter = skyline_iterations(H, subpixel, tol)
     per_launch = max(1, MAX_THREADS_PER_LAUNCH // W)
-    out = np.empty((P, W), dtype=np.float64)
-    distance = np.empty((P, W), dtype=np.float64) if with_distance else None
+    out = np.empty((len(pa), W), dtype=np.float64)
+    distance = np.empty((len(pa), W), dtype=np.float64) if with_distance else None
     kernel = _skyline_kernel if terrain.jit else _skyline_scalar
-    for start in range(0, P, per_launch):
+    for start in range(0, len(pa), per_launch):
         sl = slice(start, start + per_launch)
         basis = np.concatenate([origins[sl], d0[sl], du[sl], dv[sl]], axis=1)
-        result = kernel(terrain, basis, W, H, subpixel, n_iter, with_distance, float(near_m), edge_tests)
+        result = kernel(terrain, basis, W, H, subpixel, n_iter, with_distance, float(near_m))
         if with_distance:
             out[sl], distance[sl] = result
         else:
             out[sl] = result
-    return (out, distance) if with_distance else out
+    if with_distance:
+        return (out[0], distance[0]) if single else (out, distance)
+    return out[0] if single else out
 
 
 def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixel: bool, n_iter: int,
-                    with_distance: bool = False, near_m: float = 0.0, edge_tests: bool = True):
+                    with_distance: bool = False, near_m: float = 0.0):
     """Run :func:`_bisect_columns` for every (pose, column) and return (P, W) float64
     skylines (and distances, with ``with_distance``)."""
     import drjit as dr
@@ -114,12 +100,12 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
     # one frozen function per kernel shape, recorded once and then replayed: with one for all,
     # Dr.Jit 1.5 replayed a near-clipped call with the recording of another shape now and then
     # (wrong skylines, up to 50 deg off, after calls with and without the clip were mixed)
-    static = (W, H, subpixel, n_iter, with_distance, near_m > 0, edge_tests)
+    static = (W, H, subpixel, n_iter, with_distance, near_m > 0)
     frozen = _frozen_bisect.get(static)
     if frozen is None:
         def bisect(scene, buf, idx, maxt, near, ground, grid):
             return _bisect_columns(scene, buf, idx, maxt, W, H, subpixel, n_iter, with_distance, near_m > 0, near,
-                                   ground, grid, edge_tests)
+                                   ground, grid)
 
         frozen = _frozen_bisect[static] = dr.freeze(bisect)
     result = frozen(terrain.scene, mi.Float(basis.astype(np.float32).ravel()), dr.arange(mi.UInt32, P * W),
@@ -134,7 +120,7 @@ _frozen_bisect: dict = {}
 
 
 def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_iter: int, with_distance: bool = False,
-                    near_clip: bool = False, near=None, ground=None, grid=None, edge_tests: bool = True):
+                    near_clip: bool = False, near=None, ground=None, grid=None):
     """One Dr.Jit kernel: thread = (pose, column); a symbolic loop bisects v; with
     ``with_distance`` one more ray, on the terrain side of the boundary, measures its distance;
     with ``near_clip`` rays start ``near`` metres out (and one starting under the ground hits:
@@ -187,6 +173,7 @@ def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_ite
         return v, dr.select(dr.isnan(v) | (t >= maxt), dr.inf, t)
 
     if subpixel:
+        top, bottom = hits(mi.Float(0.0)), hits(mi.Float(float(H)))
         lo, hi = dr.zeros(mi.Float, n), dr.full(mi.Float, float(H), n)
 
         def body(lo, hi, i):
@@ -195,9 +182,6 @@ def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_ite
             return dr.select(hit, lo, mid), dr.select(hit, mid, hi), i + 1
 
         lo, hi, _ = dr.while_loop((lo, hi, dr.zeros(mi.UInt32, n)), lambda lo, hi, i: i < n_iter, body)
-        if not edge_tests:
-            return with_distance_of(0.5 * (lo + hi), hi)
-        top, bottom = hits(mi.Float(0.0)), hits(mi.Float(float(H)))
         v = dr.select(top, 0.0, dr.select(bottom, 0.5 * (lo + hi), dr.nan))
         return with_distance_of(v, dr.select(top, 0.0, hi))
     lo, hi = dr.full(mi.Float, -1.0, n), dr.full(mi.Float, float(H), n)
@@ -212,7 +196,7 @@ def _bisect_columns(scene, buf, idx, maxt, W: int, H: int, subpixel: bool, n_ite
 
 
 def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixel: bool, n_iter: int,
-                    with_distance: bool = False, near_m: float = 0.0, edge_tests: bool = True, ray_test=None):
+                    with_distance: bool = False, near_m: float = 0.0, ray_test=None):
     """The same bisection in numpy for the scalar fallback variant (slow). ``ray_test(o, d)``
     (mesh-space origins and unit directions -> bool hits) defaults to the terrain's own; the
     renderer benchmark passes another ray tracer's to time it on the same work."""
@@ -243,14 +227,12 @@ def _skyline_scalar(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
 
     n = P * W
     if subpixel:
+        top, bottom = hits(np.zeros(n)), hits(np.full(n, float(H)))
         lo, hi = np.zeros(n), np.full(n, float(H))
         for _ in range(n_iter):
             mid = 0.5 * (lo + hi)
             hit = hits(mid)
             lo, hi = np.where(hit, lo, mid), np.where(hit, mid, hi)
-        if not edge_tests:
-            return with_distance_of(0.5 * (lo + hi), hi)
-        top, bottom = hits(np.zeros(n)), hits(np.full(n, float(H)))
         return with_distance_of(np.where(top, 0.0, np.where(bottom, 0.5 * (lo + hi), np.nan)), np.where(top, 0.0, hi))
     else:
         lo, hi = np.full(n, -1.0), np.full(n, float(H))
