@@ -107,7 +107,8 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
             return _bisect_columns(scene, buf, idx, maxt, W, H, subpixel, n_iter, with_distance, near_m > 0, near,
                                    ground, grid)
 
-        frozen = _frozen_bisect[static] = dr.freeze(bisect)
+        # one recording per terrain (its scene and buffers): Dr.Jit's default warns after 10, a bench-real run has more
+        frozen = _frozen_bisect[static] = dr.freeze(bisect, warn_after=64)
     result = frozen(terrain.scene, mi.Float(basis.astype(np.float32).ravel()), dr.arange(mi.UInt32, P * W),
                     dr.opaque(mi.Float, terrain.max_distance), dr.opaque(mi.Float, near_m), terrain.ground,
                     mi.Float(terrain.grid))
