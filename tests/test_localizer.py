@@ -180,6 +180,27 @@ def test_scores_are_robust_and_alignment_recovers_a_shift():
         assert coarse[0][0] == pytest.approx(every[0][0], abs=1e-4)
 
 
+def test_alignment_keeps_the_camera_roll_within_the_bound():
+    """A rendered skyline tilted by 0.2 px/px (11.3 deg of roll) is aligned with that slope when
+    the roll is free, and with the slope that leaves the pose's roll at +-5 deg when bounded
+    (the photo preset's ``max_swing_deg``), from a pose already rolled by 2 deg too."""
+    from skyrender.localizer.refinement import realigned
+
+    rng = np.random.default_rng(1)
+    cols = np.arange(1, 640, 2)
+    image = 200 + np.cumsum(rng.normal(0, 2, 320))
+    rolled = image - 0.2 * (cols + 0.5 - 320.0)
+    w = np.ones(320)
+    free = align_skylines(rolled[None], image, cols, 320.0, w, shifts=np.zeros(1))
+    assert free[4][0] == pytest.approx(0.2, abs=1e-3) and free[0][0] < 0.01
+    for swing in (0.0, 2.0):
+        pose = np.array([[0.0, 0.0, 0.0, 10.0, 0.0, swing]])
+        bounded = align_skylines(rolled[None], image, cols, 320.0, w, shifts=np.zeros(1),
+                                 params=ScoreParams(max_swing_deg=5.0), swing=pose[:, 5])
+        turned = realigned(pose, bounded[2], bounded[3], bounded[4], 500.0)
+        assert turned[0, 5] == pytest.approx(-5.0, abs=1e-3) and bounded[0][0] > 1.0
+
+
 def test_trusted_score_counts_far_columns_and_charges_the_rest():
     """trust 1 beyond trust_far_m, 0 nearer than trust_near_m; an untrusted column costs
     untrusted_px whatever its error, so a pose whose skyline is all near has no evidence."""
@@ -450,6 +471,34 @@ def test_localizes_from_the_far_horizons_alone(scene, views):
                       params=LocalizeParams(n_peaks=2))
     _assert_close(result, pose)
     assert result.stats.evaluated == 0 and result.stats.horizon_poses > 100
+    # every refined candidate is kept, the answer the best of them
+    refined = np.array(result.stats.refined_poses)
+    assert len(refined) == result.stats.refined > 1
+    best = refined[np.argmin(refined[:, 7])]
+    assert np.allclose(best[:6], result.pose) and best[7] == result.stats.best_score
+
+
+def test_the_truth_refinement_diagnostic_orients_and_pins_a_camera_at_its_position(scene, views):
+    """``diagnostics.truth_refine``: at a view's true position, the pan x tilt grid finds its
+    orientation within the grid's half steps, and the pinned refinement fits the skyline
+    without leaving the position; a wrong answer is blamed on the score only when the truth
+    scores no better."""
+    from dataclasses import replace
+
+    from skyrender.diagnostics.truth_refine import PINNED_LEVELS, orientation_at, verdict
+
+    _, terrain, _ = scene
+    params = LocalizeParams()
+    truth = views.poses[0].array()
+    sky = render_skylines(terrain, truth, K)
+    start = orientation_at(terrain, truth[0], truth[1], 2.0, K, sky, np.ones(640), params, n=3)[0]
+    assert abs((start[3] - truth[3] + 180) % 360 - 180) <= 1.01 and abs(start[4] - truth[4]) <= 2.51
+    pinned = refine_pose(terrain, start, K, 2.0, sky, np.ones(640), params=params.score,
+                         refine=replace(params.refine, search_levels=PINNED_LEVELS))
+    assert pinned.score < 0.1 and np.hypot(*(pinned.pose[:2] - truth[:2])) < 5.0
+    row = {"error_m": 5000.0, "answer_score": 1.5, "pinned": {"score": 1.2}, "from_truth": {"score": 1.0, "moved_m": 2000.0}}
+    assert verdict(row) == "search" and verdict({**row, "pinned": {"score": 1.6}}) == "score"
+    assert verdict({**row, "error_m": 300.0}) == "right"
 
 
 def test_localizes_a_view_whose_peaks_form_no_model_triple(scene, views):
@@ -708,6 +757,40 @@ def test_refinement_fits_the_camera_height_within_its_bound(scene, views):
     assert 2.0 < height_of(free) <= 42.0 + 1e-6
     assert abs(height_of(free) - 25.0) < abs(height_of(fixed) - 25.0)
     assert free.score <= fixed.score
+
+
+def test_horizon_costs_with_a_bounded_roll_equal_a_direct_fit_with_the_slope_held():
+    """The far-horizon cost of every (centre, azimuth) with the slope term held within a roll
+    bound (the photo preset's) equals a direct weighted least-squares fit of the offset with the
+    slope at the bound, where the free fit's slope lies beyond it, and the free fit's elsewhere."""
+    import scipy.fft
+
+    from skyrender.localizer.horizon_search import horizon_costs
+
+    rng = np.random.default_rng(3)
+    n_bins, bin_deg = 360, 1.0
+    P = np.cumsum(rng.normal(0, 0.3, (4, n_bins)), axis=1).astype(np.float32)
+    P -= np.linspace(0, 1, n_bins)[None] * (P[:, -1:] - P[:, :1])  # periodic
+    spectra = scipy.fft.rfft(P, axis=1), scipy.fft.rfft(P * P, axis=1)
+    bins = np.arange(-20, 21)
+    alpha = np.radians(bins * bin_deg)
+    w = rng.uniform(0.2, 1.0, len(bins))
+    # the photo: horizon 2 seen at azimuth 100 with a roll of 12 deg and an offset
+    e = P[2, (bins + 100) % n_bins] - 1.5 - np.tan(np.radians(12.0)) * np.degrees(alpha)
+    free, _ = horizon_costs(spectra, n_bins, bins, e, w, bin_deg, terms=2)
+    held, offset_at = horizon_costs(spectra, n_bins, bins, e, w, bin_deg, terms=2, max_swing_deg=5.0)
+    assert free[2, 100] < 1e-4 and held[2, 100] > 0.01
+    bound = np.tan(np.radians(5.0)) * 180 / np.pi
+    for c, p in ((2, 100), (0, 37), (3, 250)):
+        d = P[c, (bins + p) % n_bins] - e
+        X = np.column_stack([np.ones_like(alpha), alpha])
+        beta = np.linalg.solve(X.T @ (X * w[:, None]), X.T @ (w * d))
+        slope = np.clip(beta[1], -bound, bound)
+        offset = np.sum(w * (d - slope * alpha)) / w.sum()
+        direct = np.sum(w * (d - offset - slope * alpha) ** 2) / w.sum()
+        assert held[c, p] == pytest.approx(direct, rel=1e-3, abs=1e-5)
+        assert offset_at(np.array([c * n_bins + p]))[0] == pytest.approx(offset, rel=1e-3, abs=1e-4)
+    assert np.all(held >= free - 1e-5)
 
 
 def test_the_smallest_horizon_costs_are_a_full_sort_s_first_k_ties_by_index():

@@ -23,6 +23,7 @@ window's best (centre, azimuth) pairs become poses for verification.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,6 +44,7 @@ class HorizonSearchParams:
     min_bins: int = 12  # a window needs this many azimuth bins of skyline
     tilts: tuple = (0.0,)  # camera tilts (deg) the skyline is turned into directions for (photos look up at ridges)
     terms: int = 3  # fitted per (centre, azimuth): elevation offset, + slope (swing), + curvature (the level error)
+    max_swing_deg: float = math.inf  # the slope fitted stays within what this camera roll (deg) gives
     rank_by_cost: bool = False  # refine the best by this search's own cost too, not only by verification score
 
 
@@ -64,10 +66,13 @@ def skyline_directions(skyline: np.ndarray, weights: np.ndarray, intrinsics: Int
 
 
 def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.ndarray, elevation: np.ndarray,
-                  weights: np.ndarray, bin_deg: float, terms: int = 3):
+                  weights: np.ndarray, bin_deg: float, terms: int = 3, max_swing_deg: float = math.inf):
     """Weighted mean squared residual (deg^2) of every (centre, azimuth) after the
     fit of offset + a alpha + b alpha^2 (the first ``terms`` of them), (N, n_bins); and
-    a function giving the fitted offset (deg) at flat indices of it.
+    a function giving the fitted offset (deg) at flat indices of it. With ``max_swing_deg``
+    finite the slope a is held within the slope a camera rolled that far gives (tan(roll)
+    deg per deg), the other terms fitted for the held slope: a least-squares fit's cost grows
+    by d^2 / (gram^-1)_11 for its slope moved by d, the others moving with it.
 
     spectra : rfft over azimuth of the horizons P (N, n_bins) and of P^2.
     bins, elevation, weights : the photo's skyline (:func:`skyline_directions`).
@@ -105,10 +110,26 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
             np.multiply(r[i], r[j], out=term)
             term *= inv[i, j] * (1.0 if i == j else 2.0)
             cost -= term
+    bounded = terms > 1 and math.isfinite(max_swing_deg)
+    max_slope = np.float32(np.tan(np.radians(max_swing_deg)) * 180.0 / np.pi) if bounded else None  # deg per rad
+
+    def slope_excess(slope: np.ndarray) -> np.ndarray:  # in place: how far each slope lies beyond the bound
+        slope -= np.clip(slope, -max_slope, max_slope)
+        return slope
+
+    if bounded:
+        excess = slope_excess(sum(inv[1, k] * r[k] for k in range(terms)))
+        np.multiply(excess, excess, out=excess)
+        excess *= np.float32(1.0 / inv[1, 1])
+        cost += excess
+        del excess
     cost /= np.float32(max(float(w.sum()), 1e-9))
 
     def offset_at(flat: np.ndarray) -> np.ndarray:  # the fitted offset (deg) at flat indices, computed there only
-        return sum(inv[0, k] * r[k].ravel()[flat] for k in range(terms))
+        offset = sum(inv[0, k] * r[k].ravel()[flat] for k in range(terms))
+        if bounded:
+            offset -= slope_excess(sum(inv[1, k] * r[k].ravel()[flat] for k in range(terms))) * (inv[0, 1] / inv[1, 1])
+        return offset
 
     return cost, offset_at
 
@@ -149,7 +170,8 @@ def horizon_poses(horizons: Horizons, skyline: np.ndarray, weights: np.ndarray, 
             w_win = w * ((frac >= lo) & (frac <= hi))
             if np.count_nonzero(w_win) < params.min_bins:
                 continue
-            cost, offset_at = horizon_costs(spectra, n_bins, bins, elevation, w_win, horizons.bin_deg, params.terms)
+            cost, offset_at = horizon_costs(spectra, n_bins, bins, elevation, w_win, horizons.bin_deg, params.terms,
+                                            params.max_swing_deg)
             best = smallest(cost, params.per_window)
             cost = cost.ravel()
             flats.append(best)

@@ -77,6 +77,9 @@ PHOTO_MARGIN_LOGIT = _photo_margin_logit(_FIT)
 #: the training photos (``localize_fit.abstain_threshold``): above every wrong answer there, and
 #: at least 0.5.
 PHOTO_MIN_CONFIDENCE = float(_FIT.get("min_confidence", 0.8))
+#: Real photographs stand nearly upright (hand-held, EXIF orientation applied): the camera roll
+#: the photo preset's alignment and least squares may fit (deg; CH1 training oracle fits: -5.4..3.0).
+PHOTO_MAX_SWING_DEG = 8.0
 
 
 @dataclass(frozen=True)
@@ -140,11 +143,15 @@ class LocalizeParams:
         are off (on CH1 their peaks are rarely DEM peaks; generating them took 10-30 s). The refined scores of right and
         wrong poses overlap (1.1-2.4 vs 1.1-4.0 px on CH1 training photos), but the
         margin to the best pose over 1 km away separates them, so the confidence is a
-        logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`)."""
+        logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`).
+        The camera roll stays within :data:`PHOTO_MAX_SWING_DEG` in the verification's alignment
+        and the refinement: wrong places fitted with 10-50 deg of it (held in the far-horizon
+        fit too, ``HorizonSearchParams.max_swing_deg``, it lost a confident answer on the CH1 dev photos)."""
         return cls(skyline_method="hybrid", max_hypotheses=0, final_refinements=8, max_refinements=4,
                    max_horizon_refinements=16,
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=1000.0, confidence_model="margin",
                    margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,
+                   score=ScoreParams(max_swing_deg=PHOTO_MAX_SWING_DEG),
                    horizon=HorizonSearchParams(tilts=(-10.0, 0.0, 10.0, 20.0, 30.0), terms=2, rank_by_cost=True))
 
     def skyline_params(self) -> SkylineParams:
@@ -191,6 +198,9 @@ class LocalizeStats:
     # the three-point search chunk by chunk: hypotheses solved, best verified and refined scores so far
     # (px, None: none yet), whether a pose was accepted
     rounds: list = field(default_factory=list)
+    # every refined candidate, in the order refined: [x, y, z, pan, tilt, swing, f_px, refined score
+    # (px)]; the places an analyst would check next, and what the diagnostics compare with the truth
+    refined_poses: list = field(default_factory=list)
 
     def add_time(self, stage: str, seconds: float) -> None:
         self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
@@ -215,6 +225,7 @@ class LocalizeStats:
                 "best_score": self.best_score, "runner_up_score": self.runner_up_score,
                 "seconds": {k: round(v, 4) for k, v in self.seconds.items()},
                 "peak_mb": {k: round(v, 1) for k, v in self.peak_mb.items()}, "rounds": list(self.rounds),
+                "refined_poses": [list(r) for r in self.refined_poses],
                 "hypotheses_per_second": self.evaluated / solve if solve > 0 else 0.0}
 
 
@@ -691,3 +702,5 @@ def _refine(cand: _Candidate, search: _Search) -> None:
                                search.weights, fit_focal=search.fit_focal, f_px=cand.f_px, points=cand.points,
                                params=params.score, give_up_px=params.give_up_sweep_px, refine=params.refine)
     search.stats.refined += 1
+    r = cand.refined
+    search.stats.refined_poses.append(tuple(float(v) for v in (*r.pose, r.f_px, r.score)))

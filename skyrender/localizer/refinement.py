@@ -186,7 +186,8 @@ def local_rescore(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, h
     score = np.full(len(grid), np.inf)
     if ok.any():
         rendered, cols = strided_skylines(terrain, grid[ok], intrinsics, stride, tol_px=0.5)
-        s, _, a, b, c = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols], params=params)
+        s, _, a, b, c = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols], params=params,
+                                       swing=grid[ok][:, 5])
         score[ok] = s
         grid[ok] = realigned(grid[ok], a, b, c, intrinsics.f_px)
     score = score.reshape(P, n * n)
@@ -233,7 +234,8 @@ def local_search(terrain: Terrain, seeds: list[np.ndarray], intrinsics: Intrinsi
         rendered, cols = strided_skylines(terrain, poses, k_full, stride, tol_px=0.1)
         renders += len(poses)
         score, _, a, b, c = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols],
-                                           shifts=SHIFTS_PX if n_level == 0 else fine_shifts, params=params)
+                                           shifts=SHIFTS_PX if n_level == 0 else fine_shifts, params=params,
+                                           swing=poses[:, 5])
         poses = realigned(poses, a, b, c, f_px)
         spacing = min(2 * level[1] / max(level[3] - 1, 1), 2 * level[0] / max(level[2] - 1, 1))
         seeds = best_apart(poses, score, refine.search_beam, spacing)
@@ -315,8 +317,11 @@ def _least_squares(terrain: Terrain, q0: np.ndarray, free: list[int], intrinsics
     sqrt_w = np.sqrt(np.asarray(weights, np.float64))
     all_steps = np.r_[STEP_XY_M, STEP_XY_M, STEP_DEG, STEP_DEG, STEP_DEG, STEP_F_REL * q0[5], STEP_H_M]
     steps = all_steps[free]
-    lower = np.where(np.array(free) == 6, 0.0, -np.inf)
-    upper = np.where(np.array(free) == 6, max(max_height, q0[6] + 1e-6), np.inf)
+    free_ = np.array(free)
+    lower = np.where(free_ == 6, 0.0, np.where(free_ == 4, -params.max_swing_deg, -np.inf))
+    upper = np.where(free_ == 6, max(max_height, q0[6] + 1e-6), np.where(free_ == 4, params.max_swing_deg, np.inf))
+    q0 = q0.copy()
+    q0[4] = np.clip(q0[4], -params.max_swing_deg, params.max_swing_deg)  # a start outside the bound moves onto it
     counter = [0]
 
     def full(p: np.ndarray) -> np.ndarray:

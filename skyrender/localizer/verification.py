@@ -21,6 +21,7 @@ whose own skyline is near poorly, so :func:`verify_poses` gives both scores.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,6 +42,10 @@ class ScoreParams:
     trust_near_m: float = 500.0  # verification only: rendered skyline nearer than this is not counted...
     trust_far_m: float = 4000.0  # ... and counts in full beyond this
     untrusted_px: float = 1.0  # ... the cost of a column not counted
+    # the camera's roll (swing, deg) the alignment and the least squares may reach: inf for renders
+    # (any roll); hand-held photos stand nearly upright (the oracle fits of the CH1 training photos:
+    # -5.4..3.0 deg), and wrong places fitted with 10-50 deg of roll (experiments/ch1/README.md)
+    max_swing_deg: float = math.inf
 
 
 def column_errors(rendered: np.ndarray, image: np.ndarray, cap_px: float) -> np.ndarray:
@@ -80,7 +85,7 @@ def trust_of_distance(distance: np.ndarray, params: ScoreParams = ScoreParams())
 
 def align_skylines(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx: float, weights: np.ndarray,
                    shifts: np.ndarray = SHIFTS_PX, params: ScoreParams = ScoreParams(),
-                   trust: np.ndarray | None = None, coarse: int = 3):
+                   trust: np.ndarray | None = None, coarse: int = 3, swing: np.ndarray | None = None):
     """Best 2-D alignment of rendered skylines (P, n) to the photo's (n,), both sampled
     at image columns ``columns`` (u = column + 0.5): the rendered curve moved right by
     ``a`` px and by ``b + c (u - cx)`` px down, a from ``shifts`` (evenly spaced), b and
@@ -88,6 +93,8 @@ def align_skylines(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray,
     column counts (:func:`trust_of_distance`; None: all in full); it moves with its
     column. Every ``coarse``-th shift is tried first, then the shifts around each
     pose's best (on rendered skylines sampled every few px the score is smooth in a).
+    ``swing`` (P,) deg: the poses' roll (None: 0); the slope c is kept to what leaves it
+    within ``params.max_swing_deg`` (:func:`slope_bounds`).
     Returns (score, agreement, a, b, c), each (P,).
     """
     shifts = np.asarray(shifts, np.float64)
@@ -95,17 +102,30 @@ def align_skylines(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray,
     rendered = np.asarray(rendered, np.float32)  # float32: the alignment is the verification's hot path
     trust = None if trust is None else np.asarray(trust, np.float32)
     best = (np.full(P, np.inf), np.zeros(P), np.zeros(P), np.zeros(P), np.zeros(P))
+    bounds = slope_bounds(np.zeros(P) if swing is None else swing, params.max_swing_deg)
     coarse = coarse if len(shifts) > 5 * coarse else 1
     for a in shifts[::coarse]:
-        best = _better(best, _aligned_at(rendered, image, columns, cx, weights, a, params, trust))
+        best = _better(best, _aligned_at(rendered, image, columns, cx, weights, a, params, trust, bounds))
     if coarse > 1:
         step = shifts[1] - shifts[0]
         centre = best[2].copy()
         for k in range(1 - coarse, coarse):
             if k:
                 a = np.clip(centre + k * step, shifts[0], shifts[-1])
-                best = _better(best, _aligned_at(rendered, image, columns, cx, weights, a, params, trust))
+                best = _better(best, _aligned_at(rendered, image, columns, cx, weights, a, params, trust, bounds))
     return best
+
+
+def slope_bounds(swing: np.ndarray, max_swing_deg: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """(low, high) (P,) of the alignment slope c for poses of roll ``swing`` (P,) deg: a slope c
+    turns a pose's swing by -atan(c) (:func:`skyrender.localizer.refinement.realigned`), so these
+    keep it within +-``max_swing_deg``; None when unbounded."""
+    if not math.isfinite(max_swing_deg):
+        return None
+    swing = np.asarray(swing, np.float64)
+    lim = np.radians(max_swing_deg)
+    return (np.tan(np.clip(np.radians(swing) - lim, -1.5, 1.5)).astype(np.float32),
+            np.tan(np.clip(np.radians(swing) + lim, -1.5, 1.5)).astype(np.float32))
 
 
 def _better(best: tuple, new: tuple) -> tuple:
@@ -115,9 +135,9 @@ def _better(best: tuple, new: tuple) -> tuple:
 
 
 def _aligned_at(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx: float, weights: np.ndarray,
-                a: np.ndarray, params: ScoreParams, trust: np.ndarray | None) -> tuple:
-    """:func:`align_skylines` at one shift ``a`` (px; a float, or one per pose (P,)):
-    (score, agreement, a, b, c), each (P,)."""
+                a: np.ndarray, params: ScoreParams, trust: np.ndarray | None, bounds: tuple | None = None) -> tuple:
+    """:func:`align_skylines` at one shift ``a`` (px; a float, or one per pose (P,)), the slope
+    within ``bounds`` (:func:`slope_bounds`; None: free): (score, agreement, a, b, c), each (P,)."""
     u = columns + 0.5
     n = len(u)
     step = u[1] - u[0] if n > 1 else 1.0
@@ -148,6 +168,8 @@ def _aligned_at(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx
         sy, sxy = (w * d0).sum(1), (wx * d0).sum(1)
         det = np.maximum(sw * sxx - sx * sx, 1e-9)
         c = (sw * sxy - sx * sy) / det
+        if bounds is not None:  # the best offset for the bounded slope
+            c = np.clip(c, *bounds)
         b = (sy - c * sx) / np.maximum(sw, 1e-9)
         w = np.where(np.abs(d0 - b[:, None] - c[:, None] * x) <= 3.0, w, np.float32(0.0))
     score, agreement = score_skylines(moved + b[:, None] + c[:, None] * x, image, weights, params, trusted)
@@ -171,7 +193,8 @@ def verify_poses(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, im
         return np.zeros(0), np.zeros(0)
     rendered, distance, cols = strided_skylines(terrain, poses, intrinsics, stride, tol_px=0.5, with_distance=True)
     image, w = image_skyline[cols], weights[cols]
-    score, *_ = align_skylines(rendered, image, cols, intrinsics.cx, w, params=params)
+    swing = np.asarray(poses, np.float64)[:, 5]
+    score, *_ = align_skylines(rendered, image, cols, intrinsics.cx, w, params=params, swing=swing)
     trusted, *_ = align_skylines(rendered, image, cols, intrinsics.cx, w, params=params,
-                                 trust=trust_of_distance(distance, params))
+                                 trust=trust_of_distance(distance, params), swing=swing)
     return score, trusted
