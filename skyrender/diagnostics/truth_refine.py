@@ -143,7 +143,8 @@ def probe(items, params=None, progress: bool = True, arrays_to: str | None = Non
         row = probe_photo(it, *loaded[window], params, arrays_to)
         rows.append(row)
         if progress:
-            print(f"  [{n + 1}/{len(items)}] {it.key}: answer {row['error_m']:.0f} m at {row['answer_score']:.2f} px "
+            answer = "none" if row["error_m"] is None else f"{row['error_m']:.0f} m at {row['answer_score']:.2f} px"
+            print(f"  [{n + 1}/{len(items)}] {it.key}: answer {answer} "
                   f"(confidence {row['confidence']:.2f}); best within 1 km: rank {row['best_near_rank']}, "
                   f"{row['best_near_score']}; truth pinned {row['pinned']['score']:.2f} px, refined from it "
                   f"{row['from_truth']['score']:.2f} px {row['from_truth']['moved_m']:.0f} m away: {row['verdict']}",
