@@ -50,15 +50,25 @@ def places_of(items) -> tuple[dict[str, str], dict[str, tuple[float, float]]]:
     return place_of, {place: tuple(np.mean(p, axis=0)) for place, p in positions.items()}
 
 
+def load_place(lat: float, lon: float):
+    """(dem, terrain, photo-preset model, window) of a place centred at (lat, lon): the SRTM3
+    mosaic within :func:`place_window`, its model built once and cached."""
+    from ..dem import load_dem
+    from ..model import ModelParams, cached_model
+    from ..render import Terrain
+
+    window = place_window(lat, lon)
+    dem = load_dem(tiles_around(lat, lon, DEM_DIR), bounds=window)
+    terrain = Terrain(dem)
+    return dem, terrain, cached_model(dem, ModelParams.for_photos(), terrain=terrain), window
+
+
 def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown_every: int = 1) -> list[dict]:
     """Localize each photo (``params``: LocalizeParams, default the photo preset); rows as in
     the module doc. The fov-unknown mode runs on every ``unknown_every``-th photo only (it
     searches several focal lengths, so it takes several times longer)."""
-    from ..dem import load_dem
     from ..features import extract_skyline, load_photo
     from ..localizer import LocalizeParams, localize
-    from ..model import ModelParams, cached_model
-    from ..render import Terrain
 
     place_of, centres = places_of(items)
     loaded: dict[str, tuple] = {}
@@ -67,12 +77,8 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
     for n, it in enumerate(items):
         place = place_of[it.key]
         if place not in loaded:
-            lat, lon = centres[place]
-            window = place_window(lat, lon)
             t = time.perf_counter()
-            dem = load_dem(tiles_around(lat, lon, DEM_DIR), bounds=window)
-            terrain = Terrain(dem)
-            model = cached_model(dem, ModelParams.for_photos(), terrain=terrain)
+            dem, terrain, model, window = load_place(*centres[place])
             loaded.clear()  # one place's model in memory at a time
             loaded[place] = (dem, terrain, model, time.perf_counter() - t, window)
         dem, terrain, model, model_seconds, window = loaded[place]

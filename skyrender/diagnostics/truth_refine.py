@@ -124,23 +124,18 @@ def verdict(row: dict) -> str:
 
 
 def probe(items, params=None, progress: bool = True, arrays_to: str | None = None) -> list[dict]:
-    from ..benchmarks.real_localize import DEM_DIR, place_window, places_of, tiles_around
-    from ..dem import load_dem
+    from ..benchmarks.real_localize import load_place, places_of
     from ..localizer import LocalizeParams
-    from ..model import ModelParams, cached_model
-    from ..render import Terrain
 
     params = params or LocalizeParams.for_photos()
     place_of, centres = places_of(items)
     rows, loaded = [], {}
     for n, it in enumerate(items):
-        window = place_window(*centres[place_of[it.key]])
-        if window not in loaded:
+        place = place_of[it.key]
+        if place not in loaded:
             loaded.clear()  # one place's model in memory at a time
-            dem = load_dem(tiles_around(*centres[place_of[it.key]], DEM_DIR), bounds=window)
-            terrain = Terrain(dem)
-            loaded[window] = (dem, terrain, cached_model(dem, ModelParams.for_photos(), terrain=terrain))
-        row = probe_photo(it, *loaded[window], params, arrays_to)
+            loaded[place] = load_place(*centres[place])[:3]
+        row = probe_photo(it, *loaded[place], params, arrays_to)
         rows.append(row)
         if progress:
             answer = "none" if row["error_m"] is None else f"{row['error_m']:.0f} m at {row['answer_score']:.2f} px"
