@@ -453,6 +453,55 @@ def test_a_benchmark_run_is_rescored_under_another_confidence_without_moving_a_p
         rescore(rows, (5.0, 0.0), 0.5)  # would answer for c, whose pose the run did not keep
 
 
+def test_the_runner_up_is_the_best_pose_beyond_the_distance():
+    from skyrender.localizer.pipeline import runner_up_index
+
+    xy = np.array([[0.0, 0.0], [500.0, 0.0], [0.0, 2500.0], [4000.0, 0.0]])
+    scores = np.array([1.0, 1.05, 1.2, 1.5])
+    assert runner_up_index(xy, scores, 0, 300.0) == 1
+    assert runner_up_index(xy, scores, 0, 1000.0) == 2
+    assert runner_up_index(xy, scores, 0, 3000.0) == 3
+    assert runner_up_index(xy, scores, 0, 5000.0) is None
+    assert runner_up_index(xy, scores, 3, 3000.0) == 0  # measured from the given pose
+
+
+def test_a_rescore_takes_the_runner_up_from_the_rows_refined_poses():
+    from skyrender.benchmarks.real_localize import margin_of, rescore
+
+    # the answer (score 1) has a near rival 1.5 km away (1.05) and a far one 6 km away (2)
+    poses = [[0, 0, 2, 10, 5, 0, 800, 1.0], [1500, 0, 2, 12, 5, 0, 800, 1.05], [0, 6000, 2, 90, 5, 0, 800, 2.0]]
+    row = {"photo": "a", "status": "localized", "confidence": 0.1, "best_score": 1.0, "runner_up_score": 1.05,
+           "error_m": 300.0, "refined_poses": poses}
+    assert margin_of(row, 1000.0) == pytest.approx(1 - 1 / 1.05)
+    assert margin_of(row, 3000.0) == pytest.approx(0.5)
+    assert margin_of(row, 10000.0) == 1.0
+    assert margin_of({"best_score": 1.0, "runner_up_score": 2.0}, 3000.0) == 0.5  # no poses kept: the run's runner-up
+    assert np.isnan(margin_of({"best_score": None}))
+    assert rescore([row], (-3.0, 20.0), 0.9, 1000.0)[0]["status"] == "abstained"
+    out = rescore([row], (-3.0, 20.0), 0.9, 3000.0)[0]
+    assert out["status"] == "localized" and out["confidence"] == pytest.approx(1 / (1 + np.exp(-7.0)))
+
+
+def test_the_photo_confidence_fit_takes_the_runner_up_distance_that_keeps_most_right_answers():
+    from skyrender.training.localize_fit import fit_confidence
+
+    rows = []
+    for n in range(12):  # right answers, half of them with a rival 2 km away that sees the same skyline
+        best, near = 1.0 + 0.05 * n, [[2000, 0, 2, 0, 0, 0, 800, (1.0 + 0.05 * n) * 1.005]] if n % 2 else []
+        rows.append({"photo": f"r{n}", "error_m": 200.0, "seconds": 1.0, "refined_poses": [
+            [0, 0, 2, 0, 0, 0, 800, best], *near, [9000, 0, 2, 0, 0, 0, 800, best * 2]]})
+    for n in range(12):  # wrong answers with a rival 8 km away nearly as good
+        best = 1.5 + 0.05 * n
+        rows.append({"photo": f"w{n}", "error_m": 30000.0, "seconds": 1.0, "refined_poses": [
+            [0, 0, 2, 0, 0, 0, 800, best], [8000, 0, 2, 0, 0, 0, 800, best * (1.01 + 0.002 * n)]]})
+    fit = fit_confidence(rows, choices_m=(1000.0, 3000.0, 10000.0))
+    # beyond 1 km the near rivals hold back half the right answers, beyond 3 km none
+    assert fit["runner_up_m"] == 3000.0 and fit["right"] == 12 and fit["photos"] == 24
+    assert fit["kept_by_runner_up_m"] == {"1000": 6, "3000": 12, "10000": 0}  # 10 km: no rival left, no margin
+    a, b = fit["logit"]
+    assert b > 0 and 0.5 <= fit["min_confidence"] <= 1.0
+
+
 def test_the_photo_abstention_threshold_clears_every_wrong_training_answer():
     from skyrender.training.localize_fit import abstain_threshold
 

@@ -95,7 +95,8 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
             row = {"photo": it.key, "fov_mode": mode, "status": result.status, "confidence": result.confidence,
                    "seconds": seconds, "model_seconds": model_seconds, "window": window,
                    "stage_seconds": result.stats.to_dict()["seconds"], "best_score": result.stats.best_score,
-                   "runner_up_score": result.stats.runner_up_score}
+                   "runner_up_score": result.stats.runner_up_score, "truth_xy": [tx, ty],
+                   "refined_poses": [list(r) for r in result.stats.refined_poses]}
             if result.localized:
                 row["error_m"] = float(position_errors(result.pose, np.array([tx, ty]))[0])
                 row["fov"] = result.fov
@@ -114,24 +115,44 @@ def summary(rows: list[dict]) -> dict:
     err = np.array([r.get("error_m", np.inf) for r in rows])
     out = {"photos": n, "abstained": int(sum(r["status"] != "localized" for r in rows)),
            "wrong_over_1km": int(np.sum(np.isfinite(err) & (err > 1000))),
+           # abstentions whose withheld answer (a --no-abstain run, rescored) was within 1 km
+           "withheld_within_1km": int(sum(r.get("withheld_error_m", np.inf) <= 1000 for r in rows)),
            "median_seconds": float(np.median([r["seconds"] for r in rows])) if n else None}
     for m in RECALL_M:
         out[f"recall_{int(m)}m"] = float(np.mean(err <= m)) if n else 0.0
     return out
 
 
-def rescore(rows: list[dict], logit: tuple[float, float], threshold: float) -> list[dict]:
-    """The rows under another photo confidence (logistic ``logit`` of the margin, abstaining
-    below ``threshold``): the poses do not depend on it, so an answer stays or becomes an
-    abstention (its error kept as ``withheld_error_m``). An abstention that the new confidence
-    would answer needs a new run (its pose was not kept): ValueError."""
-    from ..localizer.pipeline import margin_confidence
+def margin_of(row: dict, runner_up_m: float = 1000.0) -> float:
+    """1 - best / runner-up refined score, the runner-up the best refined pose farther than
+    ``runner_up_m`` (m) from the answer (from the row's ``refined_poses``; a row without them
+    keeps the run's own runner-up score); 1 without a runner-up, NaN without a pose."""
+    from ..localizer.pipeline import runner_up_index
 
+    poses = np.asarray(row.get("refined_poses") or [], np.float64).reshape(-1, 8)
+    if len(poses):
+        best = int(np.argmin(poses[:, 7]))
+        i = runner_up_index(poses[:, :2], poses[:, 7], best, runner_up_m)
+        return 1.0 - poses[best, 7] / poses[i, 7] if i is not None else 1.0
+    best, runner = row.get("best_score"), row.get("runner_up_score")
+    if best is None:
+        return float("nan")
+    return 1.0 - best / runner if runner else 1.0
+
+
+def rescore(rows: list[dict], logit: tuple[float, float], threshold: float, runner_up_m: float = 1000.0) -> list[dict]:
+    """The rows under another photo confidence (logistic ``logit`` of the margin to the best
+    refined pose farther than ``runner_up_m``, :func:`margin_of`; abstaining below ``threshold``):
+    the poses do not depend on it, so an answer stays or becomes an abstention (its error kept as
+    ``withheld_error_m``). An abstention that the new confidence would answer needs a new run
+    (its pose was not kept): ValueError."""
     out = []
     for r in rows:
         r = dict(r)
-        if r.get("best_score") is not None:
-            r["confidence"] = float(margin_confidence(r["best_score"], r.get("runner_up_score") or np.inf, logit))
+        margin = margin_of(r, runner_up_m)
+        if np.isfinite(margin):
+            a, b = logit
+            r["confidence"] = float(1.0 / (1.0 + np.exp(-(a + b * margin))))
         if r["status"] == "localized" and r["confidence"] < threshold:
             r["status"], r["withheld_error_m"] = "abstained", r.pop("error_m")
         elif r["status"] != "localized" and r["confidence"] >= threshold:
@@ -142,20 +163,17 @@ def rescore(rows: list[dict], logit: tuple[float, float], threshold: float) -> l
 
 def table(report: dict) -> str:
     """The per-photo table and the summaries. An abstention's confidence is the one it
-    fell short with (from the best and runner-up scores the row keeps)."""
-    from ..localizer.pipeline import PHOTO_MARGIN_LOGIT, margin_confidence
-
+    fell short with; a withheld answer's error (``--rescore``) is shown in brackets."""
     lines = [f"{'photo':36s} {'fov':8s} {'status':10s} {'error m':>9s} {'conf':>5s} {'s':>6s}"]
     for r in report["photos"]:
-        err = f"{r['error_m']:9.0f}" if "error_m" in r else f"{'-':>9s}"
-        conf = r["confidence"]
-        if r["status"] != "localized" and r.get("best_score") is not None:
-            conf = margin_confidence(r["best_score"], r.get("runner_up_score") or np.inf, PHOTO_MARGIN_LOGIT)
-        lines.append(f"{r['photo']:36s} {r['fov_mode']:8s} {r['status']:10s} {err} {conf:5.2f} {r['seconds']:6.1f}")
+        err = (f"{r['error_m']:9.0f}" if "error_m" in r else
+               f"{'(%.0f)' % r['withheld_error_m']:>9s}" if "withheld_error_m" in r else f"{'-':>9s}")
+        lines.append(f"{r['photo']:36s} {r['fov_mode']:8s} {r['status']:10s} {err} {r['confidence']:5.2f} {r['seconds']:6.1f}")
     for m, s in report["summary"].items():
         lines.append(f"{m} fov: {s['photos']} photos; within 100 m {100 * s['recall_100m']:.0f} %, 250 m "
                      f"{100 * s['recall_250m']:.0f} %, 1 km {100 * s['recall_1000m']:.0f} %; abstained {s['abstained']}; "
-                     f"confident and > 1 km wrong {s['wrong_over_1km']}; median {s['median_seconds']:.1f} s")
+                     f"confident and > 1 km wrong {s['wrong_over_1km']}; median {s['median_seconds']:.1f} s"
+                     + (f"; withheld but within 1 km {s['withheld_within_1km']}" if s.get("withheld_within_1km") else ""))
     return "\n".join(lines)
 
 
@@ -199,11 +217,15 @@ def main(argv=None) -> int:
         with open(os.path.join(args.out, f"{name}.json")) as f:
             report = json.load(f)
         if args.rescore:
-            from ..localizer.pipeline import PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE
+            from ..localizer.pipeline import PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE, PHOTO_RUNNER_UP_M
 
-            report["photos"] = rescore(report["photos"], PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE)
+            if any("refined_poses" not in r for r in report["photos"]) and PHOTO_RUNNER_UP_M != 1000.0:
+                print(f"--rescore: {name} keeps no refined poses, so its runner-ups beyond {PHOTO_RUNNER_UP_M:.0f} m "
+                      "are unknown; run the benchmark again")
+                return 2
+            report["photos"] = rescore(report["photos"], PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE, PHOTO_RUNNER_UP_M)
             report["rescored"] = {"at": git_commit(), "logit": list(PHOTO_MARGIN_LOGIT),
-                                  "min_confidence": PHOTO_MIN_CONFIDENCE}
+                                  "min_confidence": PHOTO_MIN_CONFIDENCE, "runner_up_m": PHOTO_RUNNER_UP_M}
     else:
         rows = run(items, args.fov, params=params, unknown_every=max(1, args.unknown_every))
         report = {"commit": git_commit(), "cpus": os.cpu_count(), "side": args.side, "photos": rows}
@@ -222,7 +244,7 @@ def main(argv=None) -> int:
         if "rescored" in report:
             rs = report["rescored"]
             head += (f"; confidences rescored at {rs['at']} (logit {rs['logit'][0]:.3f} + {rs['logit'][1]:.3f} m, "
-                     f"abstain below {rs['min_confidence']:.2f})")
+                     f"runner-up beyond {rs.get('runner_up_m', 1000.0):.0f} m, abstain below {rs['min_confidence']:.2f})")
         f.write(f"{head}\n\n{text}\n")
     return 0
 

@@ -77,6 +77,9 @@ PHOTO_MARGIN_LOGIT = _photo_margin_logit(_FIT)
 #: the training photos (``localize_fit.abstain_threshold``): above every wrong answer there, and
 #: at least 0.5.
 PHOTO_MIN_CONFIDENCE = float(_FIT.get("min_confidence", 0.8))
+#: The photo confidence's runner-up is the best refined pose farther than this (m) from the
+#: answer, chosen with the logistic on the training photos (``localize_fit``).
+PHOTO_RUNNER_UP_M = float(_FIT.get("runner_up_m", 1000.0))
 #: Real photographs stand nearly upright (hand-held, EXIF orientation applied): the camera roll
 #: the photo preset's alignment and least squares may fit (deg; CH1 training oracle fits: -5.4..3.0).
 PHOTO_MAX_SWING_DEG = 8.0
@@ -142,14 +145,14 @@ class LocalizeParams:
         refined; the skyline comes from the learned extractor. Three-point hypotheses
         are off (on CH1 their peaks are rarely DEM peaks; generating them took 10-30 s). The refined scores of right and
         wrong poses overlap (1.1-2.4 vs 1.1-4.0 px on CH1 training photos), but the
-        margin to the best pose over 1 km away separates them, so the confidence is a
-        logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`).
+        margin to the best pose farther away (:data:`PHOTO_RUNNER_UP_M`) separates them, so the
+        confidence is a logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`).
         The camera roll stays within :data:`PHOTO_MAX_SWING_DEG` in the verification's alignment
         and the refinement: wrong places fitted with 10-50 deg of it (held in the far-horizon
         fit too, ``HorizonSearchParams.max_swing_deg``, it lost a confident answer on the CH1 dev photos)."""
         return cls(skyline_method="hybrid", max_hypotheses=0, final_refinements=8, max_refinements=4,
                    max_horizon_refinements=16,
-                   give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=1000.0, confidence_model="margin",
+                   give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=PHOTO_RUNNER_UP_M, confidence_model="margin",
                    margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,
                    score=ScoreParams(max_swing_deg=PHOTO_MAX_SWING_DEG),
                    horizon=HorizonSearchParams(tilts=(-10.0, 0.0, 10.0, 20.0, 30.0), terms=2, rank_by_cost=True))
@@ -334,6 +337,15 @@ def confidence_of(best: Refined, runner_up: Refined | None) -> float:
     agreement_margin = max(best.agreement - runner_up.agreement, 0.0)
     score_margin = max(1.0 - best.score / max(runner_up.score, 1e-9), 0.0)
     return float(best.agreement * min(1.0, 0.5 + 5.0 * agreement_margin + score_margin))
+
+
+def runner_up_index(xy: np.ndarray, scores: np.ndarray, best: int, runner_up_m: float) -> int | None:
+    """Index of the lowest-scoring pose farther than ``runner_up_m`` (m) from pose ``best``
+    (``xy``: (N, 2) positions in m; ``scores``: (N,) refined scores in px, lower is better);
+    None when every pose lies within that distance."""
+    xy, scores = np.asarray(xy, np.float64).reshape(-1, 2), np.asarray(scores, np.float64)
+    far = np.hypot(*(xy - xy[best]).T) > runner_up_m
+    return int(np.flatnonzero(far)[np.argmin(scores[far])]) if far.any() else None
 
 
 def margin_confidence(best_score: float, runner_up_score: float, logit: tuple) -> float:
@@ -609,7 +621,9 @@ def _decide(search: _Search, accepted: _Candidate | None, t_start: float) -> Loc
             others = [c for c in done if c is not best and _distinct([best.refined.pose], c.refined.pose,
                                                                      params.same_pose_m)]
         else:
-            others = [c for c in done if math.hypot(*(c.refined.pose[:2] - best.refined.pose[:2])) > params.runner_up_m]
+            i = runner_up_index([c.refined.pose[:2] for c in done], [c.refined.score for c in done],
+                                [c is best for c in done].index(True), params.runner_up_m)
+            others = [] if i is None else [done[i]]
         runner_up = others[0].refined if others else None
         stats.best_score, stats.runner_up_score = best.refined.score, runner_up.score if runner_up else None
         if params.confidence_model == "margin":

@@ -1,15 +1,20 @@
 """Fit the real-photo confidence of the localizer on the CH1 photos of the training side.
 
-``python -m skyrender.training.localize_fit [--limit N]``
+``python -m skyrender.training.localize_fit [--limit N] [--from-rows]``
 
 Each CH1 photo of the training and dev sides (``experiments/photos/split.json``) is
 localized with :meth:`LocalizeParams.for_photos` and no abstention (``min_confidence``
 0), its skyline extracted by the photo preset's extractor, the fov known. Per photo the
 margin m = 1 - best / runner-up refined score is recorded with whether the answer lies
 within 1 km of the true position; a logistic P(within 1 km) = 1 / (1 + exp(-(a + b m)))
-is fitted by maximum likelihood (scipy) and written with the rows and the abstention
-threshold (:func:`abstain_threshold`) to ``skyrender/localizer/photo_confidence.json``,
-which the photo preset reads. The validation side is never used here.
+is fitted by maximum likelihood (scipy), its abstention threshold set
+(:func:`abstain_threshold`). The runner-up is the best refined pose farther than D from the
+answer; D is chosen from :data:`RUNNER_UP_CHOICES_M` as the one whose fit keeps the most
+right answers above its threshold (a runner-up 1-3 km away often sees the same skyline from
+the same valley, and is no evidence against the answer). Fit, D and rows go to
+``skyrender/localizer/photo_confidence.json``, which the photo preset reads; the
+localization rows (refined poses, truth) to ``experiments/ch1/confidence-train-rows.json``,
+from which ``--from-rows`` refits without localizing. The validation side is never used here.
 """
 
 from __future__ import annotations
@@ -22,21 +27,16 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import minimize
 
-from ..benchmarks.real_localize import run
-from ..datasets.real_photos import DEFAULT_PHOTOS, items_on_side
+from ..benchmarks.real_localize import margin_of, run
+from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
 from ..evaluate import git_commit
 from ..localizer import LocalizeParams
 from ..localizer.pipeline import PHOTO_CONFIDENCE_FILE
 
 RIGHT_M = 1000.0
-
-
-def margin_of(row: dict) -> float:
-    """1 - best / runner-up refined score; 1 without a runner-up, NaN without a pose."""
-    best, runner = row.get("best_score"), row.get("runner_up_score")
-    if best is None:
-        return float("nan")
-    return 1.0 - best / runner if runner else 1.0
+#: The runner-up distances tried (m): the one keeping most right training answers above the threshold is taken.
+RUNNER_UP_CHOICES_M = (1000.0, 1500.0, 2000.0, 3000.0, 5000.0)
+TRAINING_ROWS_FILE = os.path.join(REPO, "experiments", "ch1", "confidence-train-rows.json")
 
 
 def fit_logistic(margin: np.ndarray, right: np.ndarray, ridge: float = 1e-3) -> tuple[float, float]:
@@ -59,32 +59,65 @@ def abstain_threshold(confidence: np.ndarray, right: np.ndarray, floor: float = 
     return float(min(1.0, max(floor, np.ceil((top + 1e-9) / step) * step)))
 
 
+def fit_at(margin: np.ndarray, right: np.ndarray) -> dict:
+    """The logistic of ``margin`` (NaN: no pose, confidence 0) for ``right`` (bool), its
+    training confidences and abstention threshold."""
+    ok = np.isfinite(margin)
+    a, b = fit_logistic(margin[ok], right[ok].astype(float))
+    confidence = np.where(ok, 1.0 / (1.0 + np.exp(-(a + b * np.nan_to_num(margin)))), 0.0)
+    return {"logit": (a, b), "margin": margin, "confidence": confidence, "threshold": abstain_threshold(confidence, right)}
+
+
+def fit_confidence(rows: list[dict], choices_m=RUNNER_UP_CHOICES_M) -> dict:
+    """The photo confidence fitted on benchmark ``rows`` (:func:`real_localize.run`): for each
+    runner-up distance in ``choices_m`` (m) the logistic and its threshold (:func:`fit_at`);
+    the distance whose fit keeps the most right answers above its threshold is taken (ties:
+    the nearest). Returns what ``photo_confidence.json`` holds, less the commits."""
+    right = np.array([(r.get("error_m") if r.get("error_m") is not None else np.inf) <= RIGHT_M for r in rows])
+    fits = {d: fit_at(np.array([margin_of(r, d) for r in rows]), right) for d in choices_m}
+    kept = {d: int(np.sum((fit["confidence"] >= fit["threshold"]) & right)) for d, fit in fits.items()}
+    runner_up_m = max(choices_m, key=lambda d: (kept[d], -d))
+    fit = fits[runner_up_m]
+    return {"logit": list(fit["logit"]), "min_confidence": fit["threshold"], "runner_up_m": float(runner_up_m),
+            "right_m": RIGHT_M, "photos": len(rows), "right": int(right.sum()),
+            "kept_by_runner_up_m": {str(int(d)): kept[d] for d in choices_m},
+            "rows": [{"photo": r["photo"], "margin": m, "error_m": r.get("error_m"), "seconds": r["seconds"]}
+                     for r, m in zip(rows, fit["margin"])]}
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--limit", type=int, default=0, help="at most N photos, spread over the places")
     parser.add_argument("--out", default=PHOTO_CONFIDENCE_FILE)
+    parser.add_argument("--rows", default=TRAINING_ROWS_FILE,
+                        help="the localization rows (refined poses, truth) are written here, or read with --from-rows")
+    parser.add_argument("--from-rows", action="store_true", help="refit from the rows of an earlier run, localizing nothing")
     args = parser.parse_args(argv)
-    if not os.path.isdir(DEFAULT_PHOTOS):
-        print(f"no photos at {DEFAULT_PHOTOS}")
-        return 2
-    items = [it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")]
-    if args.limit:
-        items = items[:: max(1, len(items) // args.limit)][: args.limit]
-    rows = run(items, ["known"], params=replace(LocalizeParams.for_photos(), min_confidence=0.0))
-    margin = np.array([margin_of(r) for r in rows])
-    right = np.array([r.get("error_m", np.inf) <= RIGHT_M for r in rows], float)
-    ok = np.isfinite(margin)
-    a, b = fit_logistic(margin[ok], right[ok])
-    confidence = np.where(ok, 1.0 / (1.0 + np.exp(-(a + b * np.nan_to_num(margin)))), 0.0)
-    threshold = abstain_threshold(confidence, right > 0)
-    out = {"commit": git_commit(), "logit": [a, b], "min_confidence": threshold, "right_m": RIGHT_M, "photos": len(rows),
-           "right": int(right.sum()), "rows": [{"photo": r["photo"], "margin": m, "error_m": r.get("error_m"),
-                                                "seconds": r["seconds"]} for r, m in zip(rows, margin)]}
+    if args.from_rows:
+        try:
+            with open(args.rows) as f:
+                saved = json.load(f)
+            rows, rows_commit = saved["rows"], saved.get("commit")
+        except (OSError, ValueError, KeyError) as exc:
+            print(f"--from-rows: cannot read the rows of {args.rows}: {exc}")
+            return 2
+    else:
+        if not os.path.isdir(DEFAULT_PHOTOS):
+            print(f"no photos at {DEFAULT_PHOTOS}")
+            return 2
+        items = [it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")]
+        if args.limit:
+            items = items[:: max(1, len(items) // args.limit)][: args.limit]
+        rows, rows_commit = run(items, ["known"], params=replace(LocalizeParams.for_photos(), min_confidence=0.0)), git_commit()
+        with open(args.rows, "w") as f:
+            json.dump({"commit": rows_commit, "rows": rows}, f)
+    out = {"commit": git_commit(), "localized_at": rows_commit, **fit_confidence(rows)}
     with open(args.out, "w") as f:
         json.dump(out, f, indent=1)
-    print(f"{len(rows)} photos, {int(right.sum())} within {RIGHT_M:.0f} m; logit a = {a:.3f}, b = {b:.3f}; "
-          f"abstain below {threshold:.2f}; "
-          f"wrote {args.out}")
+    (a, b), kept = out["logit"], out["kept_by_runner_up_m"]
+    print(f"{len(rows)} photos, {out['right']} within {RIGHT_M:.0f} m; logit a = {a:.3f}, b = {b:.3f}; "
+          f"abstain below {out['min_confidence']:.2f}; runner-up beyond {out['runner_up_m']:.0f} m "
+          f"(right answers kept: {', '.join(f'{d} m {k}' for d, k in kept.items())}); wrote {args.out}")
     return 0
 
 
