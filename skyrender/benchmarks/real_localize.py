@@ -146,13 +146,14 @@ def rescore(rows: list[dict], logit: tuple[float, float], threshold: float, runn
     the poses do not depend on it, so an answer stays or becomes an abstention (its error kept as
     ``withheld_error_m``). An abstention that the new confidence would answer needs a new run
     (its pose was not kept): ValueError."""
+    from ..localizer.pipeline import margin_logistic
+
     out = []
     for r in rows:
         r = dict(r)
         margin = margin_of(r, runner_up_m)
         if np.isfinite(margin):
-            a, b = logit
-            r["confidence"] = float(1.0 / (1.0 + np.exp(-(a + b * margin))))
+            r["confidence"] = float(margin_logistic(margin, logit))
         if r["status"] == "localized" and r["confidence"] < threshold:
             r["status"], r["withheld_error_m"] = "abstained", r.pop("error_m")
         elif r["status"] != "localized" and r["confidence"] >= threshold:

@@ -348,12 +348,17 @@ def runner_up_index(xy: np.ndarray, scores: np.ndarray, best: int, runner_up_m: 
     return int(np.flatnonzero(far)[np.argmin(scores[far])]) if far.any() else None
 
 
+def margin_logistic(margin, logit: tuple):
+    """P(right) = 1 / (1 + exp(-(a + b m))) of the margin m (scalar or array) for ``logit`` = (a, b)."""
+    a, b = logit
+    return 1.0 / (1.0 + np.exp(-(a + b * np.asarray(margin, np.float64))))
+
+
 def margin_confidence(best_score: float, runner_up_score: float, logit: tuple) -> float:
     """P(right) from the relative margin m = 1 - best / runner-up (scores in px, lower is
-    better): 1 / (1 + exp(-(a + b m))) for ``logit`` = (a, b); no runner-up is m = 1."""
+    better), :func:`margin_logistic`; no runner-up is m = 1."""
     margin = 1.0 - best_score / runner_up_score if runner_up_score > 0 and math.isfinite(runner_up_score) else 1.0
-    a, b = logit
-    return float(1.0 / (1.0 + math.exp(-(a + b * margin))))
+    return float(margin_logistic(margin, logit))
 
 
 @dataclass

@@ -31,7 +31,7 @@ from ..benchmarks.real_localize import margin_of, run
 from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
 from ..evaluate import git_commit
 from ..localizer import LocalizeParams
-from ..localizer.pipeline import PHOTO_CONFIDENCE_FILE
+from ..localizer.pipeline import PHOTO_CONFIDENCE_FILE, margin_logistic
 
 RIGHT_M = 1000.0
 #: The runner-up distances tried (m): the one keeping most right training answers above the threshold is taken.
@@ -64,7 +64,7 @@ def fit_at(margin: np.ndarray, right: np.ndarray) -> dict:
     training confidences and abstention threshold."""
     ok = np.isfinite(margin)
     a, b = fit_logistic(margin[ok], right[ok].astype(float))
-    confidence = np.where(ok, 1.0 / (1.0 + np.exp(-(a + b * np.nan_to_num(margin)))), 0.0)
+    confidence = np.where(ok, margin_logistic(np.nan_to_num(margin), (a, b)), 0.0)
     return {"logit": (a, b), "margin": margin, "confidence": confidence, "threshold": abstain_threshold(confidence, right)}
 
 
