@@ -63,18 +63,26 @@ def load_place(lat: float, lon: float):
     return dem, terrain, cached_model(dem, ModelParams.for_photos(), terrain=terrain), window
 
 
-def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown_every: int = 1) -> list[dict]:
+def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown_every: int = 1,
+        done: dict | None = None, on_row=None) -> list[dict]:
     """Localize each photo (``params``: LocalizeParams, default the photo preset); rows as in
     the module doc. The fov-unknown mode runs on every ``unknown_every``-th photo only (it
-    searches several focal lengths, so it takes several times longer)."""
+    searches several focal lengths, so it takes several times longer). ``done`` maps
+    (photo, fov mode) to rows of an interrupted run, kept as they are (that place's model is
+    not even loaded when all its photos are done); ``on_row(row)`` is called on each new row."""
     from ..features import extract_skyline, load_photo
     from ..localizer import LocalizeParams, localize
 
     place_of, centres = places_of(items)
     loaded: dict[str, tuple] = {}
     params = params or LocalizeParams.for_photos()
+    done = done or {}
     rows = []
     for n, it in enumerate(items):
+        modes = [m for m in fov_modes if not (m == "unknown" and n % unknown_every)]
+        if all((it.key, m) in done for m in modes):
+            rows.extend(done[it.key, m] for m in modes)
+            continue
         place = place_of[it.key]
         if place not in loaded:
             t = time.perf_counter()
@@ -83,8 +91,9 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
             loaded[place] = (dem, terrain, model, time.perf_counter() - t, window)
         dem, terrain, model, model_seconds, window = loaded[place]
         tx, ty = (float(v) for v in dem.from_lonlat(it.lon, it.lat))
-        for mode in fov_modes:
-            if mode == "unknown" and n % unknown_every:
+        for mode in modes:
+            if (it.key, mode) in done:
+                rows.append(done[it.key, mode])
                 continue
             t = time.perf_counter()
             image = load_photo(it.image_path)
@@ -103,6 +112,8 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
                 row["pose"] = [float(v) for v in result.pose]
                 row["height_m"] = float(result.pose[2] - dem.ground(result.pose[0], result.pose[1]))
             rows.append(row)
+            if on_row is not None:
+                on_row(row)
             if progress:
                 err = f"{row['error_m']:.0f} m" if "error_m" in row else "-"
                 print(f"  [{n + 1}/{len(items)}] {it.key} ({mode} fov): {row['status']}, error {err}, "
@@ -228,7 +239,23 @@ def main(argv=None) -> int:
             report["rescored"] = {"at": git_commit(), "logit": list(PHOTO_MARGIN_LOGIT),
                                   "min_confidence": PHOTO_MIN_CONFIDENCE, "runner_up_m": PHOTO_RUNNER_UP_M}
     else:
-        rows = run(items, args.fov, params=params, unknown_every=max(1, args.unknown_every))
+        # rows are appended to <name>.rows.jsonl as they come, so an interrupted run resumes
+        os.makedirs(args.out, exist_ok=True)
+        rows_path = os.path.join(args.out, f"{name}.rows.jsonl")
+        done = {}
+        if os.path.exists(rows_path):
+            with open(rows_path) as f:
+                for line in f:
+                    if line.strip():
+                        r = json.loads(line)
+                        done[r["photo"], r["fov_mode"]] = r
+            print(f"resuming: {len(done)} rows of {rows_path} kept")
+
+        def append_row(row: dict) -> None:
+            with open(rows_path, "a") as f:
+                f.write(json.dumps(row) + "\n")
+
+        rows = run(items, args.fov, params=params, unknown_every=max(1, args.unknown_every), done=done, on_row=append_row)
         report = {"commit": git_commit(), "cpus": os.cpu_count(), "side": args.side, "photos": rows}
         if args.set or args.no_abstain:
             report["overrides"] = {"set": json.loads(args.set) if args.set else None, "no_abstain": args.no_abstain}
@@ -247,6 +274,8 @@ def main(argv=None) -> int:
             head += (f"; confidences rescored at {rs['at']} (logit {rs['logit'][0]:.3f} + {rs['logit'][1]:.3f} m, "
                      f"runner-up beyond {rs.get('runner_up_m', 1000.0):.0f} m, abstain below {rs['min_confidence']:.2f})")
         f.write(f"{head}\n\n{text}\n")
+    if not args.retable and os.path.exists(rows_path):
+        os.remove(rows_path)  # the run is whole in <name>.json; a new run with this tag starts afresh
     return 0
 
 
