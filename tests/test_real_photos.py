@@ -8,7 +8,7 @@ import os
 import numpy as np
 import pytest
 
-from skyrender.datasets.real_photos import SPLIT_FILE, load_split, local_km, make_split, photo_items, places
+from skyrender.datasets.real_photos import SPLIT_FILE, dev_fold_of, load_split, local_km, make_split, photo_items, places
 from skyrender.features.photo_io import exif_fov, load_photo
 
 from .conftest import DATA, data_path
@@ -24,6 +24,20 @@ def test_the_committed_split_keeps_places_apart_and_holds_out_the_scored_photos(
     assert all(v["side"] == "heldout" for k, v in photos.items() if k.split("/")[0] in ("web", "geopose3k"))
     sides = [v["side"] for k, v in photos.items() if k.startswith("ch1/")]
     assert sides.count("validation") >= 50 and sides.count("train") >= 50
+
+
+def test_the_dev_folds_deal_whole_places_and_cover_the_dev_side_evenly():
+    with open(SPLIT_FILE) as f:
+        photos = json.load(f)["photos"]
+    fold = dev_fold_of()
+    assert set(fold) == {k for k, v in photos.items() if v["side"] == "dev"}
+    folds_of_place: dict[str, set] = {}
+    for key, k in fold.items():
+        folds_of_place.setdefault(photos[key]["place"], set()).add(k)
+    assert all(len(s) == 1 for s in folds_of_place.values())  # a place never in both folds
+    for set_name in ("ch1", "web_train"):  # each set in both folds, about half each
+        counts = np.bincount([k for key, k in fold.items() if key.startswith(set_name + "/")], minlength=2)
+        assert counts.min() >= 0.4 * counts.sum()
 
 
 def test_no_validation_camera_stands_within_two_km_of_a_training_camera():

@@ -184,6 +184,31 @@ def items_on_side(side: str, data_dir: str = DEFAULT_PHOTOS, split_path: str = S
     return [it for it in photo_items(data_dir) if split.get(it.key) == side]
 
 
+DEV_FOLDS = 2
+
+
+def dev_fold_of(split_path: str = SPLIT_FILE, folds: int = DEV_FOLDS) -> dict[str, int]:
+    """``{key: fold}`` of the dev photos, whole places to a fold: each set's dev places in name
+    order, dealt round-robin (CH1 place01 -> 0, place02 -> 1, ...; web035 -> 0, web036 -> 1, ...).
+    For cross-fitting: a network trained on the training side plus one fold is judged on the
+    others, which it never saw, so dev stays a measure of unseen places."""
+    with open(split_path) as f:
+        photos = json.load(f)["photos"]
+    dev_places = sorted({v["place"] for v in photos.values() if v["side"] == "dev"})
+    fold: dict[str, int] = {}
+    for set_name in sorted({p.split("/")[0] for p in dev_places}):
+        for n, place in enumerate(p for p in dev_places if p.split("/")[0] == set_name):
+            fold[place] = n % folds
+    return {k: fold[v["place"]] for k, v in photos.items() if v["side"] == "dev"}
+
+
+def items_in_dev_fold(fold: int, data_dir: str = DEFAULT_PHOTOS, split_path: str = SPLIT_FILE,
+                      folds: int = DEV_FOLDS) -> list[PhotoItem]:
+    """The dev photos of one fold (:func:`dev_fold_of`) that exist under ``data_dir``."""
+    of = dev_fold_of(split_path, folds)
+    return [it for it in photo_items(data_dir) if of.get(it.key) == fold]
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description="Write the fixed training/validation split of the real photos.")
     parser.add_argument("--data", default=DEFAULT_PHOTOS)

@@ -26,7 +26,7 @@ import time
 
 import numpy as np
 
-from ..datasets.real_photos import items_on_side
+from ..datasets.real_photos import items_in_dev_fold, items_on_side
 from ..features.sky_net import STRIDE, WEIGHTS, net_input
 
 TRAIN_WIDTHS = (352, 544)  # random input width per step (multiples of STRIDE)
@@ -74,12 +74,14 @@ def _resize_width(image: np.ndarray, width: int) -> np.ndarray:
     return cv2.resize(image, (width, h), interpolation=cv2.INTER_AREA)
 
 
-def load_training_set(renders: int, seed: int) -> list[tuple[str, np.ndarray, np.ndarray]]:
-    """(name, RGB uint8 image, P(sky) float32 with NaN = unknown) at :data:`PRELOAD_WIDTH`."""
+def load_training_set(renders: int, seed: int, dev_folds: tuple[int, ...] = ()) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """(name, RGB uint8 image, P(sky) float32 with NaN = unknown) at :data:`PRELOAD_WIDTH`:
+    the training side, plus the dev photos of ``dev_folds`` (cross-fitting:
+    :func:`~skyrender.datasets.real_photos.dev_fold_of`)."""
     from ..features.photo_io import load_photo
 
     data = []
-    for it in items_on_side("train"):
+    for it in items_on_side("train") + [it for k in dev_folds for it in items_in_dev_fold(k)]:
         terrain = it.truth_mask()
         sky = np.where(terrain == 0.5, np.nan, 1.0 - terrain).astype(np.float32)
         data.append((it.key, _resize_width(load_photo(it.image_path), PRELOAD_WIDTH), _resize_width(sky, PRELOAD_WIDTH)))
@@ -122,13 +124,14 @@ def boundary_weight(sky: np.ndarray, known: np.ndarray, reach: int = 3, gain: fl
     return np.where(known, 1.0 + gain * near, 0.0).astype(np.float32)
 
 
-def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: int = 100, threads: int = 2) -> dict:
+def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: int = 100, threads: int = 2,
+          dev_folds: tuple[int, ...] = ()) -> dict:
     import torch
 
     torch.manual_seed(seed)
     torch.set_num_threads(threads)
     rng = np.random.default_rng(seed)
-    data = load_training_set(renders, seed)
+    data = load_training_set(renders, seed, dev_folds)
     model = build_model()
     opt = torch.optim.Adam(model.parameters(), lr=2e-3)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=2e-3, total_steps=steps, pct_start=0.1)
@@ -161,6 +164,7 @@ def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: in
         torch.onnx.export(model, example, out, dynamo=False, input_names=["x"], output_names=["logits"],
                           dynamic_axes={"x": {2: "h", 3: "w"}, "logits": {2: "h2", 3: "w2"}}, opset_version=17)
     log = {"seed": seed, "steps": steps, "renders": renders, "threads": threads, "photos": len(data) - renders,
+           "dev_folds": list(dev_folds),
            "train_widths": TRAIN_WIDTHS, "torch": torch.__version__, "curve": curve,
            "seconds": round(time.perf_counter() - t0, 1)}
     with open(os.path.splitext(out)[0] + ".json", "w") as f:
@@ -175,9 +179,11 @@ def main(argv=None) -> int:
     parser.add_argument("--renders", type=int, default=0,
                         help="synthetic training renders with varied skies (60 lowered the dev figures: 78.6 against 86.0 %%)")
     parser.add_argument("--threads", type=int, default=1, help="PyTorch CPU threads (results depend on it)")
+    parser.add_argument("--dev-fold", type=int, nargs="*", default=[],
+                        help="also train on these folds of the dev photos (cross-fitting; the others stay unseen)")
     parser.add_argument("--out", default=WEIGHTS)
     args = parser.parse_args(argv)
-    log = train(args.steps, args.seed, args.renders, args.out, threads=args.threads)
+    log = train(args.steps, args.seed, args.renders, args.out, threads=args.threads, dev_folds=tuple(args.dev_fold))
     print(f"wrote {args.out} ({log['photos']} photos, {log['renders']} renders, {log['seconds']:.0f} s)")
     return 0
 
