@@ -255,8 +255,9 @@ def main(argv=None) -> int:
             with open(rows_path, "a") as f:
                 f.write(json.dumps(row) + "\n")
 
+        commit = git_commit()  # the code that runs, not what the tree holds when the run ends
         rows = run(items, args.fov, params=params, unknown_every=max(1, args.unknown_every), done=done, on_row=append_row)
-        report = {"commit": git_commit(), "cpus": os.cpu_count(), "side": args.side, "photos": rows}
+        report = {"commit": commit, "cpus": os.cpu_count(), "side": args.side, "photos": rows}
         if args.set or args.no_abstain:
             report["overrides"] = {"set": json.loads(args.set) if args.set else None, "no_abstain": args.no_abstain}
     report["summary"] = {m: summary([r for r in report["photos"] if r["fov_mode"] == m]) for m in args.fov}
