@@ -83,15 +83,19 @@ def meets_target(median: float, within5: float) -> bool:
 
 
 def method_params(spec: str):
-    """SkylineParams of a method spec ``name[@width][/draftN]``: ``hybrid@512`` the network run
-    512 px wide; ``gmm/draft2`` the mixtures' early rounds on every 2nd row and column."""
+    """SkylineParams of a method spec ``name[@width][/draftN][:ONNX]``: ``hybrid@512`` the network
+    run 512 px wide; ``gmm/draft2`` the mixtures' early rounds on every 2nd row and column;
+    ``hybrid:old/sky_net.onnx`` another network (its fit beside it, ``sky_net_fit.json``)."""
     from ..features import SkylineParams
 
+    spec, _, weights = spec.partition(":")
     spec, _, draft = spec.partition("/draft")
     name, _, width = spec.partition("@")
     extra = {"net_width": int(width)} if width else {}
     if draft:
         extra["draft_scale"] = int(draft)
+    if weights:
+        extra["net_weights"] = weights
     return SkylineParams(method=name, **extra)
 
 

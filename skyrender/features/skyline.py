@@ -38,10 +38,12 @@ from .sky_net import NET_WIDTH, sky_logits
 FITTED = os.path.join(os.path.dirname(__file__), "weights", "sky_net_fit.json")  # by skyrender.training.skyline_fit
 
 
-def fitted_path(net_width: int = NET_WIDTH) -> str:
+def fitted_path(net_width: int = NET_WIDTH, net_weights: str | None = None) -> str:
     """Where the boundary weights and column confidence fitted for a network ``net_width`` px
-    wide are kept: ``sky_net_fit.json`` for the default width, ``sky_net_fit-<width>.json`` else."""
-    return FITTED if net_width == NET_WIDTH else FITTED.replace(".json", f"-{net_width}.json")
+    wide are kept: ``sky_net_fit.json`` for the default width, ``sky_net_fit-<width>.json`` else;
+    for another network's ONNX file (``net_weights``), ``<its name>_fit.json`` beside it."""
+    base = FITTED if net_weights is None else os.path.splitext(net_weights)[0] + "_fit.json"
+    return base if net_width == NET_WIDTH else base.replace(".json", f"-{net_width}.json")
 
 
 @dataclass(frozen=True)
@@ -60,6 +62,8 @@ class SkylineParams:
     net_jump_cap: float | None = None
     # the sky network's input width (px; the photo is reduced to it, never enlarged)
     net_width: int = NET_WIDTH
+    # another sky network's ONNX file (its fit in <name>_fit.json beside it); None: the shipped one
+    net_weights: str | None = None
     # wider photos are processed on a copy reduced to this width; the boundary search's weights
     # are in pixels, so both extractors are scale-sensitive (gmm's were set on 1388-wide photos)
     work_width: int = 1600
@@ -230,7 +234,7 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
         p = _gmm_probability(features, edges, texture, params)
         rows = _boundary(p, edges, params.edge_bonus, params.jump_cost, params.jump_cap, texture)
     elif params.method in ("net", "hybrid"):
-        p = p_net = net_probability(image, net_width=params.net_width)
+        p = p_net = net_probability(image, params.net_weights, net_width=params.net_width)
         rows = _boundary(p_net, edges, *_net_boundary_weights(params))
         if params.method == "hybrid":
             texture = _texture_cost(features, params.texture_weight)
@@ -244,13 +248,13 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
         return ExtractedSkyline(skyline, column_confidence(p, rows, contrast, skyline, fitted=False), p)
     # the confidence model was fitted on the network's probability: its cues come from that
     return ExtractedSkyline(skyline, column_confidence(p_net, rows, contrast, skyline, fitted=True,
-                                                       net_width=params.net_width), p)
+                                                       net_width=params.net_width, net_weights=params.net_weights), p)
 
 
 def _net_boundary_weights(params: SkylineParams) -> tuple[float, float, float]:
     """(edge bonus, jump cost, jump cap) of the boundary search on the network's probability:
     the params' own, or as fitted on the dev photos where they are None."""
-    fitted = _fitted(params.net_width)
+    fitted = _fitted(params.net_width, params.net_weights)
     return tuple(fitted[k] if getattr(params, k) is None else getattr(params, k)
                  for k in ("net_edge_bonus", "net_jump_cost", "net_jump_cap"))
 
@@ -371,10 +375,12 @@ DEFAULT_FIT = {"net_edge_bonus": 4.0, "net_jump_cost": 0.25, "net_jump_cap": 12.
 
 
 @lru_cache(maxsize=4)
-def _fitted(net_width: int = NET_WIDTH) -> dict:
-    """The weights fitted on the dev photos for the network at ``net_width`` (those of the
-    default width where that width has none), or neutral ones before any fit."""
-    path = fitted_path(net_width) if os.path.exists(fitted_path(net_width)) else FITTED
+def _fitted(net_width: int = NET_WIDTH, net_weights: str | None = None) -> dict:
+    """The weights fitted on the dev photos for the network (``net_weights``, None: the
+    shipped one) at ``net_width`` (those of the default width where that width has none),
+    or neutral ones before any fit."""
+    path = fitted_path(net_width, net_weights)
+    path = path if os.path.exists(path) else fitted_path(NET_WIDTH, net_weights)
     if not os.path.exists(path):
         return DEFAULT_FIT
     with open(path) as f:
@@ -382,13 +388,13 @@ def _fitted(net_width: int = NET_WIDTH) -> dict:
 
 
 def column_confidence(p: np.ndarray, rows: np.ndarray, contrast: np.ndarray, skyline: np.ndarray,
-                      fitted: bool = True, net_width: int = NET_WIDTH) -> np.ndarray:
+                      fitted: bool = True, net_width: int = NET_WIDTH, net_weights: str | None = None) -> np.ndarray:
     """(W,) in [0, 1]. ``fitted`` (the network's probability, run ``net_width`` px wide): the
     probability, fitted on the dev photos, that the column is within 5 px of the truth;
     otherwise (the per-photo mixtures, or no fitted model shipped) the probability margin
     times the contrast / 15."""
     x = confidence_features(p, rows, contrast, skyline)
-    model = _fitted(net_width)
+    model = _fitted(net_width, net_weights)
     if not fitted or model["coef"] is None:
         return np.clip(x[:, 0], 0, 1) * np.clip(x[:, 1], 0, 1)
     return 1.0 / (1.0 + np.exp(-(x @ np.asarray(model["coef"]) + model["intercept"])))

@@ -1,6 +1,6 @@
 """Fit the real-photo confidence of the localizer on the CH1 photos of the training side.
 
-``python -m skyrender.training.localize_fit [--limit N] [--from-rows]``
+``python -m skyrender.training.localize_fit [--limit N] [--from-rows | --extend]``
 
 Each CH1 photo of the training and dev sides (``experiments/photos/split.json``) is
 localized with :meth:`LocalizeParams.for_photos` and no abstention (``min_confidence``
@@ -98,6 +98,8 @@ def main(argv=None) -> int:
     parser.add_argument("--rows", default=TRAINING_ROWS_FILE,
                         help="the localization rows (refined poses, truth) are written here, or read with --from-rows")
     parser.add_argument("--from-rows", action="store_true", help="refit from the rows of an earlier run, localizing nothing")
+    parser.add_argument("--extend", action="store_true",
+                        help="keep the rows already in --rows and localize only the photos they lack (same localizer code)")
     parser.add_argument("--runner-up-choices", action="store_true",
                         help=f"choose the runner-up distance among {', '.join(f'{d:.0f}' for d in RUNNER_UP_CHOICES_M)} m "
                         f"on the training photos (default: {RUNNER_UP_M:.0f} m; see RUNNER_UP_CHOICES_M)")
@@ -117,7 +119,13 @@ def main(argv=None) -> int:
         items = [it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")]
         if args.limit:
             items = items[:: max(1, len(items) // args.limit)][: args.limit]
-        rows, rows_commit = run(items, ["known"], params=replace(LocalizeParams.for_photos(), min_confidence=0.0)), git_commit()
+        done, rows_commit = {}, git_commit()
+        if args.extend and os.path.exists(args.rows):
+            with open(args.rows) as f:
+                saved = json.load(f)
+            done = {(r["photo"], r["fov_mode"]): r for r in saved["rows"]}
+            rows_commit = f"{saved.get('commit')} ({len(done)} rows) + {rows_commit}"
+        rows = run(items, ["known"], params=replace(LocalizeParams.for_photos(), min_confidence=0.0), done=done)
         with open(args.rows, "w") as f:
             json.dump({"commit": rows_commit, "rows": rows}, f)
     choices = RUNNER_UP_CHOICES_M if args.runner_up_choices else (RUNNER_UP_M,)

@@ -3,8 +3,12 @@
 ``python -m skyrender.training.sky_net [--steps 4000] [--seed 0] [--threads 1]`` (``make train-sky-net``)
 
 Data: the *training* side of the fixed split (``experiments/photos/split.json``: CH1
-photos of the largest training place and web001-web034; the dev and validation sides
-are never read) and, with ``--renders N``, renders with varied skies
+photos of the largest training place and web001-web034), with ``--dev-fold K ...`` the dev
+photos of those folds (:func:`~skyrender.datasets.real_photos.dev_fold_of`: cross-fitting, a
+network on both folds with its boundary search fitted on the output of two networks each trained
+without one fold, ``skyline_fit --held-out-weights``; tried on 2026-12-03 and not shipped, see
+``experiments/photos/README.md``), never the validation side; and, with
+``--renders N``, renders with varied skies
 (:func:`skyrender.training.synthetic_skies.training_renders`: sunset silhouettes,
 overcast, haze, clouds on ridges, snow, power lines, occluders). The shipped weights use
 none: 60 renders lowered the dev figures (mean within 5 px 78.6 against 86.0 %). Each step takes one picture at a

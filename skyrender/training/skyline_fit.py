@@ -10,8 +10,13 @@ the network was not trained on; never the validation side):
    :func:`skyrender.features.skyline.confidence_features`, written to
    ``skyrender/features/weights/sky_net_fit.json`` (read by the extractor).
 
-The network has not seen these photos, so the fitted confidence is a probability for
-photos like them; ``make bench-skyline`` measures it on the validation side.
+The fit must see the network's output on photos it was not trained on: every dev photo goes
+through one network (``--weights``, default the shipped one, which never saw dev), or, for a
+network trained on the dev photos too (cross-fitting, ``sky_net --dev-fold 0 1``), the weights
+are fitted on out-of-fold output (``--held-out-weights PATTERN``: ``PATTERN.format(k)`` is a
+network trained like it but without dev fold k, :func:`~skyrender.datasets.real_photos.dev_fold_of`;
+each dev photo is run through the one that never saw it).
+``make bench-skyline`` measures the result on the validation side.
 """
 
 from __future__ import annotations
@@ -23,7 +28,7 @@ import json
 import numpy as np
 
 from ..benchmarks.skyline_photos import column_errors
-from ..datasets.real_photos import items_on_side
+from ..datasets.real_photos import dev_fold_of, items_on_side
 from ..features.sky import pixel_features
 from ..features.sky_net import NET_WIDTH
 from ..features.skyline import (
@@ -41,19 +46,21 @@ JUMP_COST = (0.5, 1.0, 2.0, 4.0)
 JUMP_CAP = (24.0, 48.0, 96.0)
 
 
-def prepared(photos: int, weights: str | None = None, net_width: int = NET_WIDTH):
+def prepared(photos: int, weights: str | None = None, net_width: int = NET_WIDTH, held_out_weights: str | None = None):
     """(features, colour edges, P(sky), truth) of up to ``photos`` dev photos, evenly spread;
-    the network run ``net_width`` px wide."""
+    the network (``weights``; or per photo ``held_out_weights.format(fold)``, the one that did
+    not train on its dev fold) run ``net_width`` px wide."""
     from ..features.photo_io import load_photo
 
+    fold = dev_fold_of() if held_out_weights else {}
     items = items_on_side("dev")
     step = max(1, len(items) // photos) if photos else 1
     out = []
     for it in items[::step]:
         image = load_photo(it.image_path)
         features = pixel_features(image)
-        out.append((features, _edge_strength(features, 97.0), net_probability(image, weights, net_width),
-                    it.truth_skyline()))
+        net = held_out_weights.format(fold[it.key]) if held_out_weights else weights
+        out.append((features, _edge_strength(features, 97.0), net_probability(image, net, net_width), it.truth_skyline()))
     return out
 
 
@@ -64,10 +71,12 @@ def skyline_with(features, edges, p, edge: float, cost: float, cap: float):
     return boundary_skyline(rows, sub, p.shape[0]), rows, contrast
 
 
-def fit(photos: int = 0, weights: str | None = None, write: bool = True, net_width: int = NET_WIDTH) -> dict:
+def fit(photos: int = 0, weights: str | None = None, write: bool = True, net_width: int = NET_WIDTH,
+        held_out_weights: str | None = None) -> dict:
+    """Fit on the dev photos (module doc); written beside ``weights`` (None: the shipped network)."""
     from sklearn.linear_model import LogisticRegression
 
-    data = prepared(photos, weights, net_width)
+    data = prepared(photos, weights, net_width, held_out_weights)
     best = None
     for edge, cost, cap in itertools.product(EDGE_BONUS, JUMP_COST, JUMP_CAP):
         scores = []
@@ -91,9 +100,10 @@ def fit(photos: int = 0, weights: str | None = None, write: bool = True, net_wid
               "photos": len(data), "columns": int(len(y)), "columns_within5": float(np.mean(y)),
               "coef": model.coef_[0].tolist() if model else [0.0, 0.0, 0.0, 0.0],
               "intercept": float(model.intercept_[0]) if model else 10.0,
-              "features": ["margin", "contrast/15", "roughness px", "1-|2p-1|"]}
+              "features": ["margin", "contrast/15", "roughness px", "1-|2p-1|"],
+              "out_of_fold": bool(held_out_weights)}
     if write:
-        with open(fitted_path(net_width), "w") as f:
+        with open(fitted_path(net_width, weights), "w") as f:
             json.dump(result, f, indent=1)
     return result
 
@@ -101,12 +111,16 @@ def fit(photos: int = 0, weights: str | None = None, write: bool = True, net_wid
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--photos", type=int, default=0, help="at most this many dev photos (0: all)")
-    parser.add_argument("--weights", default=None, help="another network's ONNX file (to compare set-ups)")
+    parser.add_argument("--weights", default=None, help="another network's ONNX file (to compare set-ups); "
+                        "the fit is written beside it as <name>_fit.json")
+    parser.add_argument("--held-out-weights", default=None, metavar="PATTERN",
+                        help="cross-fitting: PATTERN.format(k) is the network trained without dev fold k")
     parser.add_argument("--net-width", type=int, default=NET_WIDTH, help="the network's input width (px)")
     parser.add_argument("--dry-run", action="store_true", help="print, do not write the fitted file")
     args = parser.parse_args(argv)
-    r = fit(args.photos, args.weights, write=not args.dry_run, net_width=args.net_width)
-    where = "" if args.dry_run else f"; written to {fitted_path(args.net_width)}"
+    r = fit(args.photos, args.weights, write=not args.dry_run, net_width=args.net_width,
+            held_out_weights=args.held_out_weights)
+    where = "" if args.dry_run else f"; written to {fitted_path(args.net_width, args.weights)}"
     print(f"best: edge bonus {r['net_edge_bonus']}, jump cost {r['net_jump_cost']}, jump cap {r['net_jump_cap']} "
           f"(dev mean within 5 px {100 * r['dev_mean_within5']:.2f} %){where}")
     return 0
