@@ -258,3 +258,36 @@ def test_power_lines_across_an_overcast_sky_are_not_the_skyline(builtin_view):
     photo = render_photo(terrain, pose, K, Look(sky="overcast", power_lines=2, seed=13))
     e = column_errors(extract_skyline(photo.image).skyline, photo.sky_boundary)
     assert np.median(e) <= 2.0
+
+
+def test_another_sky_network_runs_with_the_fit_beside_it(tmp_path):
+    """SkylineParams.net_weights (and the benchmark's ``name:ONNX`` spec) runs another network file
+    with its ``<name>_fit.json``: a copy of the shipped network and fit extracts what the shipped one does,
+    and the copy's own fit is the one read."""
+    import shutil
+
+    from skyrender.benchmarks.skyline_photos import method_params
+    from skyrender.features import SkylineParams
+    from skyrender.features.sky_net import WEIGHTS
+    from skyrender.features.skyline import FITTED, _net_boundary_weights, fitted_path
+
+    net = tmp_path / "copy.onnx"
+    shutil.copy(WEIGHTS, net)
+    shutil.copy(FITTED, tmp_path / "copy_fit.json")
+    assert fitted_path(512, str(net)) == str(tmp_path / "copy_fit.json")
+    assert fitted_path(256, str(net)) == str(tmp_path / "copy_fit-256.json")
+    params = method_params(f"hybrid@512:{net}")
+    assert params == SkylineParams(method="hybrid", net_width=512, net_weights=str(net))
+    v = np.arange(240)[:, None]
+    ridge = 110 + 25 * np.sin(np.arange(320) / 23.0)
+    image = np.where((v < ridge)[..., None], [150, 185, 235], [70, 80, 60]).astype(np.uint8)
+    shipped = extract_skyline(image, SkylineParams(method="net"))
+    copy = extract_skyline(image, SkylineParams(method="net", net_weights=str(net)))
+    np.testing.assert_array_equal(copy.skyline, shipped.skyline)
+    assert np.nanmedian(np.abs(copy.skyline - ridge)) < 2.0  # it finds the drawn ridge
+    fit = json.loads((tmp_path / "copy_fit.json").read_text())
+    fit["net_edge_bonus"] = 1.5
+    other = tmp_path / "other.onnx"
+    shutil.copy(WEIGHTS, other)
+    (tmp_path / "other_fit.json").write_text(json.dumps(fit))
+    assert _net_boundary_weights(SkylineParams(method="net", net_weights=str(other)))[0] == 1.5
