@@ -52,9 +52,9 @@ bench-scale: install
 bench-split: install
 	$(BIN)/python -m skyrender.benchmarks.split_search --workers 2
 
-# refit the photo confidence of the localizer on 40 CH1 photos of the training side (~25 min)
+# refit the photo confidence of the localizer on the 73 CH1 photos of the training side (~40 min)
 fit-photo-confidence: install
-	$(BIN)/python -m skyrender.training.localize_fit --limit 40
+	$(BIN)/python -m skyrender.training.localize_fit
 
 # retrain the sky network and refit the boundary search on the training split (CPU, ~10 min);
 # reproduces skyrender/features/weights/ for the seed
