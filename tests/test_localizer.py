@@ -853,3 +853,19 @@ def test_the_smallest_horizon_costs_are_a_full_sort_s_first_k_ties_by_index():
         expected = np.lexsort((np.arange(flat.size), flat))[: min(k, flat.size)]
         np.testing.assert_array_equal(smallest(cost, k), expected)
     assert len(smallest(cost, 0)) == 0
+
+
+def test_an_interrupted_benchmark_run_keeps_its_finished_rows_and_loads_no_model_for_them():
+    from types import SimpleNamespace
+
+    from skyrender.benchmarks.real_localize import run
+
+    items = [SimpleNamespace(key="ch1/DSCF3435_01024", lat=46.1, lon=7.6),
+             SimpleNamespace(key="ch1/DSCF3436_01024", lat=46.1, lon=7.6)]
+    done = {(it.key, m): {"photo": it.key, "fov_mode": m} for it in items for m in ("known", "unknown")}
+    del done[items[1].key, "unknown"]  # not asked for: the fov-unknown mode runs on every 2nd photo only
+    new_rows = []
+    rows = run(items, ["known", "unknown"], progress=False, unknown_every=2, done=done, on_row=new_rows.append)
+    assert [(r["photo"], r["fov_mode"]) for r in rows] == [(items[0].key, "known"), (items[0].key, "unknown"),
+                                                           (items[1].key, "known")]
+    assert new_rows == []  # nothing localized again
