@@ -97,8 +97,9 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default=PHOTO_CONFIDENCE_FILE)
     parser.add_argument("--rows", default=TRAINING_ROWS_FILE,
                         help="the localization rows (refined poses, truth) are written here, or read with --from-rows")
-    parser.add_argument("--from-rows", action="store_true", help="refit from the rows of an earlier run, localizing nothing")
-    parser.add_argument("--extend", action="store_true",
+    source = parser.add_mutually_exclusive_group()
+    source.add_argument("--from-rows", action="store_true", help="refit from the rows of an earlier run, localizing nothing")
+    source.add_argument("--extend", action="store_true",
                         help="keep the rows already in --rows and localize only the photos they lack (same localizer code)")
     parser.add_argument("--runner-up-choices", action="store_true",
                         help=f"choose the runner-up distance among {', '.join(f'{d:.0f}' for d in RUNNER_UP_CHOICES_M)} m "
