@@ -267,13 +267,15 @@ def test_local_rescore_finds_a_camera_on_its_grid_and_realigns_the_orientation(s
         off_dem = truth.copy()
         off_dem[:2] = [dem.extent[1] + 5000.0, dem.extent[3] + 5000.0]
         starts = np.array(starts + [off_dem])
-        moved, score = local_rescore(terrain, starts, K, 2.0, sky, weights, half_m=250.0, n=5)
-        _, own = local_rescore(terrain, starts[:3], K, 2.0, sky, weights, half_m=0.0, n=1)
-        for j in range(3):
-            assert np.hypot(*(moved[j, :2] - truth[:2])) < 1.0
-            assert np.abs((moved[j, 3:] - truth[3:] + 180) % 360 - 180).max() < 0.05
-            assert score[j] < own[j]
-        assert np.isinf(score[3]) and np.array_equal(moved[3], starts[3])
+        # every 4th column (the verification's) and every 8th (LocalizeParams.rerank_stride's probe)
+        for stride in (4, 8):
+            moved, score = local_rescore(terrain, starts, K, 2.0, sky, weights, half_m=250.0, n=5, stride=stride)
+            _, own = local_rescore(terrain, starts[:3], K, 2.0, sky, weights, half_m=0.0, n=1, stride=stride)
+            for j in range(3):
+                assert np.hypot(*(moved[j, :2] - truth[:2])) < 1.0
+                assert np.abs((moved[j, 3:] - truth[3:] + 180) % 360 - 180).max() < 0.05
+                assert score[j] < own[j]
+            assert np.isinf(score[3]) and np.array_equal(moved[3], starts[3])
 
 
 def test_resection_sweep_finds_the_camera_from_three_point_poses_hundreds_of_metres_off(scene, views):

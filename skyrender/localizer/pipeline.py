@@ -132,6 +132,7 @@ class LocalizeParams:
     horizon_rerank: int = 0
     rerank_half_m: float = 250.0
     rerank_grid: int = 5
+    rerank_stride: int | None = None  # the re-ranking's renders on every n-th column (None: verify_stride)
     refine_fov: bool = False  # a given fov is only a start (e.g. from EXIF): refinement fits the focal length too
     score: ScoreParams = field(default_factory=ScoreParams)
     refine: RefineParams = field(default_factory=RefineParams)  # the refinement's search set-up
@@ -514,7 +515,7 @@ def rerank_far_horizon(terrain, poses: np.ndarray, score: np.ndarray, second: np
     k = params.horizon_rerank
     pick = np.unique(np.r_[np.argsort(score, kind="stable")[:k], np.argsort(second, kind="stable")[:k]])
     moved, rescored = local_rescore(terrain, poses[pick], intrinsics, height, sky, weights, params.rerank_half_m,
-                                    params.rerank_grid, params.verify_stride, params.score)
+                                    params.rerank_grid, params.rerank_stride or params.verify_stride, params.score)
     return pick, moved, rescored
 
 
