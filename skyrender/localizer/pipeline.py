@@ -109,7 +109,10 @@ class LocalizeParams:
     give_up_sweep_px: float = 1.5  # a refinement whose first stage fits no better than this stops there
     accept_score_px: float = 0.3  # stop early once a refined pose scores this well...
     accept_agreement: float = 0.95  # ...and agrees on this share of columns
-    confirm_chunks: int = 2  # then go on this many chunks: a pose tens of metres off can score that well too
+    # then go on this many chunks: a pose tens of metres off can score that well too. 1 since 2026-12-03: on 26
+    # rendered views (bench-localize's 10, bench-scale's synthetic 8 and 8 tile views of seed 1) a second chunk
+    # changed one answer, by 1.2 m, for 0.2-1.6 s a view (experiments/scale/README.md)
+    confirm_chunks: int = 1
     # stop rule (no prior, ordered): the search stops when the last stall_chunks chunks bettered none of the
     # best verified, trusted and refined scores by more than stall_gain (a share; 0 chunks: never). A 5 % gain
     # cut the whole tile's max 74.5 -> 43.8 s but lost a 20 %-occluded test view found in chunk 19 after 17 chunks
