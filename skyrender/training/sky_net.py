@@ -97,8 +97,47 @@ def load_training_set(renders: int, seed: int, dev_folds: tuple[int, ...] = ()) 
     return data
 
 
-def augment(image: np.ndarray, sky: np.ndarray, rng: np.random.Generator):
-    """A random width, flip, exposure, white balance, gamma, saturation and noise."""
+def depth_below_skyline(sky: np.ndarray) -> np.ndarray:
+    """(H, W) rows below the column's top terrain pixel (0 on it, negative above; a column with
+    no terrain or unknown truth: +inf). ``sky``: P(sky), NaN unknown."""
+    H = sky.shape[0]
+    terrain = np.nan_to_num(sky, nan=1.0) < 0.5
+    top = np.where(terrain.any(axis=0), np.argmax(terrain, axis=0), H).astype(np.float32)
+    top[~np.isfinite(sky).all(axis=0)] = np.inf
+    return np.arange(H, dtype=np.float32)[:, None] - top[None, :]
+
+
+def recolour_regions(img: np.ndarray, sky: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Colour changes that keep the boundary where it is but take away colour as its cue
+    (float RGB in [0, 1], ``sky`` P(sky) at the same size, NaN unknown): the terrain just below
+    the skyline is blended toward the photo's sky colour (aerial haze) or toward white (snow
+    fields, pale rock), fading with depth below the skyline over 20-200 px; or the sky is tinted
+    (sunset, overcast). Far snowy or hazy ranges under a pale sky are what the network took for
+    sky on unseen places."""
+    out = img.copy()
+    sky_px = np.nan_to_num(sky, nan=0.0) > 0.5
+    kind = rng.integers(3)
+    if kind < 2:
+        depth = depth_below_skyline(sky)
+        fade = np.exp(-np.clip(depth, 0, None) / rng.uniform(20, 200)) * (depth >= 0)
+        if kind == 0 and sky_px.any():
+            target = np.median(img[sky_px], axis=0)
+        else:
+            target = np.full(3, rng.uniform(0.8, 1.0)) * rng.uniform(0.93, 1.0, size=3)
+        a = (rng.uniform(0.3, 0.85) * fade)[..., None]
+        out = out * (1 - a) + target * a
+    else:
+        tint = rng.uniform(0.6, 1.2, size=3)
+        grey = out.mean(axis=2, keepdims=True)
+        toned = (grey + (out - grey) * rng.uniform(0.0, 1.0)) * tint
+        out = np.where(sky_px[..., None], toned, out)
+    return out
+
+
+def augment(image: np.ndarray, sky: np.ndarray, rng: np.random.Generator, recolour: float = 0.0):
+    """A random width, flip, exposure, white balance, gamma, saturation and noise; with
+    probability ``recolour`` also :func:`recolour_regions` (drawn from ``rng`` only then, so
+    ``recolour=0`` draws exactly what it did before the option existed)."""
     import cv2
 
     lo, hi = TRAIN_WIDTHS
@@ -109,6 +148,8 @@ def augment(image: np.ndarray, sky: np.ndarray, rng: np.random.Generator):
     known = cv2.resize(np.isfinite(sky).astype(np.float32), (w // 2, h // 2), interpolation=cv2.INTER_AREA) > 0.999
     if rng.random() < 0.5:
         img, lab, known = img[:, ::-1], lab[:, ::-1], known[:, ::-1]
+    if recolour and rng.random() < recolour:
+        img = recolour_regions(img, cv2.resize(np.where(known, lab, np.nan), (w, h), interpolation=cv2.INTER_NEAREST), rng)
     grey = img.mean(axis=2, keepdims=True)
     img = grey + (img - grey) * rng.uniform(0.6, 1.4)  # saturation
     img = img * rng.uniform(0.85, 1.15, size=3) * rng.uniform(0.7, 1.3)  # white balance, exposure
@@ -129,7 +170,7 @@ def boundary_weight(sky: np.ndarray, known: np.ndarray, reach: int = 3, gain: fl
 
 
 def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: int = 100, threads: int = 2,
-          dev_folds: tuple[int, ...] = ()) -> dict:
+          dev_folds: tuple[int, ...] = (), recolour: float = 0.0) -> dict:
     import torch
 
     torch.manual_seed(seed)
@@ -142,7 +183,7 @@ def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: in
     losses, curve, t0 = [], [], time.perf_counter()
     for step in range(steps):
         _, image, sky = data[int(rng.integers(len(data)))]
-        img, lab, known = augment(image, sky, rng)
+        img, lab, known = augment(image, sky, rng, recolour)
         x = torch.from_numpy(net_input(img, (img.shape[1], img.shape[0])))
         y = torch.from_numpy(np.clip(lab, 0, 1))[None, None]
         wgt = torch.from_numpy(boundary_weight(lab, known))[None, None]
@@ -168,7 +209,7 @@ def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: in
         torch.onnx.export(model, example, out, dynamo=False, input_names=["x"], output_names=["logits"],
                           dynamic_axes={"x": {2: "h", 3: "w"}, "logits": {2: "h2", 3: "w2"}}, opset_version=17)
     log = {"seed": seed, "steps": steps, "renders": renders, "threads": threads, "photos": len(data) - renders,
-           "dev_folds": list(dev_folds),
+           "dev_folds": list(dev_folds), "recolour": recolour,
            "train_widths": TRAIN_WIDTHS, "torch": torch.__version__, "curve": curve,
            "seconds": round(time.perf_counter() - t0, 1)}
     with open(os.path.splitext(out)[0] + ".json", "w") as f:
@@ -185,9 +226,12 @@ def main(argv=None) -> int:
     parser.add_argument("--threads", type=int, default=1, help="PyTorch CPU threads (results depend on it)")
     parser.add_argument("--dev-fold", type=int, nargs="*", default=[],
                         help="also train on these folds of the dev photos (cross-fitting; the others stay unseen)")
+    parser.add_argument("--recolour", type=float, default=0.0,
+                        help="share of steps whose terrain near the skyline is hazed or whitened, or whose sky is tinted")
     parser.add_argument("--out", default=WEIGHTS)
     args = parser.parse_args(argv)
-    log = train(args.steps, args.seed, args.renders, args.out, threads=args.threads, dev_folds=tuple(args.dev_fold))
+    log = train(args.steps, args.seed, args.renders, args.out, threads=args.threads, dev_folds=tuple(args.dev_fold),
+                recolour=args.recolour)
     print(f"wrote {args.out} ({log['photos']} photos, {log['renders']} renders, {log['seconds']:.0f} s)")
     return 0
 

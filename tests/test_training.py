@@ -1,0 +1,54 @@
+"""The sky network's training augmentations (numpy and OpenCV only: no PyTorch needed)."""
+
+import numpy as np
+
+from skyrender.training.sky_net import augment, depth_below_skyline, recolour_regions
+
+
+def _scene(H=60, W=80):
+    """A blue sky over dark terrain whose top edge rises from row 40 (left) to row 20 (right)."""
+    top = np.linspace(40, 20, W).round().astype(int)
+    v = np.arange(H)[:, None]
+    sky = (v < top[None, :]).astype(np.float32)
+    img = np.where(sky[..., None] > 0.5, np.array([0.3, 0.5, 0.9]), np.array([0.2, 0.25, 0.15]))
+    return img + 0.02 * np.random.default_rng(0).random((H, W, 3)), sky, top
+
+
+def test_depth_below_skyline_counts_rows_from_the_top_terrain_pixel():
+    _, sky, top = _scene()
+    sky[:, 5] = np.nan  # unknown truth in one column
+    depth = depth_below_skyline(sky)
+    assert depth[top[0], 0] == 0 and depth[top[0] + 7, 0] == 7 and depth[top[0] - 3, 0] == -3
+    assert np.all(np.isinf(depth[:, 5]))
+
+
+def test_recolouring_changes_one_side_only_and_fades_with_depth():
+    img, sky, top = _scene()
+    terrain = sky < 0.5
+    kinds = set()
+    for seed in range(40):
+        out = recolour_regions(img, sky, np.random.default_rng(seed))
+        changed = np.abs(out - img).max(axis=2) > 1e-9
+        sky_changed, terrain_changed = changed[~terrain].any(), changed[terrain].any()
+        assert not (sky_changed and terrain_changed)
+        assert out.min() >= 0.0 and out.max() <= 1.2  # a sky tint brightens by 20 % at most (augment clips later)
+        if terrain_changed:
+            kinds.add("terrain")
+            shift = np.abs(out - img).max(axis=2)
+            # the terrain just under the skyline moves more than the terrain 15 rows further down
+            u = np.arange(img.shape[1])
+            assert np.mean(shift[top, u]) > np.mean(shift[top + 15, u])
+        elif sky_changed:
+            kinds.add("sky")
+    assert kinds == {"terrain", "sky"}
+
+
+def test_augment_is_deterministic_for_a_seed_and_keeps_the_labels_of_no_recolouring():
+    img, sky, _ = _scene(120, 160)
+    image = (np.clip(img, 0, 1) * 255).astype(np.uint8)
+    a = augment(image, sky, np.random.default_rng(3), recolour=1.0)
+    b = augment(image, sky, np.random.default_rng(3), recolour=1.0)
+    c = augment(image, sky, np.random.default_rng(3), recolour=0.0)
+    assert all(np.array_equal(x, y) for x, y in zip(a, b))
+    assert np.array_equal(a[1], c[1]) and np.array_equal(a[2], c[2])  # recolouring never moves the boundary
+    assert not np.array_equal(a[0], c[0])
