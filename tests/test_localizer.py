@@ -407,6 +407,29 @@ def test_far_horizon_search_puts_the_camera_among_its_poses(scene, views):
     assert min((score < score[near].min()).sum(), (trusted < trusted[near].min()).sum()) < 12
 
 
+def test_far_horizon_search_over_a_subset_of_centres(scene, views):
+    """The unknown fov's probes search only the centres earlier fovs found: over every centre
+    the search is the full one; over the centres of the full search's poses it finds the same
+    best pose, and only poses at those centres."""
+    from skyrender.features import extract_skyline
+    from skyrender.localizer.horizon_search import centre_indices, horizon_poses
+
+    dem, terrain, model = scene
+    sky = extract_skyline(_photo(terrain, views.poses[3]))
+    poses, cost = horizon_poses(model.horizons, sky.skyline, sky.confidence, K, dem, 2.0)
+    every, every_cost = horizon_poses(model.horizons, sky.skyline, sky.confidence, K, dem, 2.0,
+                                      centres=np.arange(len(model.horizons)))
+    assert np.array_equal(every, poses) and np.array_equal(every_cost, cost)
+    found = centre_indices(model.horizons, poses[:, :2])
+    assert np.all(found >= 0) and np.allclose(model.horizons.centres[found, :2], poses[:, :2])
+    subset = np.unique(found)[::2]  # half of them, the best among them
+    subset = np.union1d(subset, found[:1])
+    sub, sub_cost = horizon_poses(model.horizons, sky.skyline, sky.confidence, K, dem, 2.0, centres=subset)
+    assert np.allclose(sub[0], poses[0]) and sub_cost[0] == cost[0]
+    assert set(centre_indices(model.horizons, sub[:, :2]).tolist()) <= set(subset.tolist())
+    assert centre_indices(model.horizons, np.array([[1e9, 1e9]]))[0] == -1
+
+
 def test_far_horizon_search_over_tilts_finds_a_camera_looking_up(scene, views):
     """Photos look up at the ridges above them (CH1: up to 30 deg): with the skyline
     turned into directions for tilts 0, 10, 20 and 30 deg, the search still gives a

@@ -268,3 +268,19 @@ def test_column_weights_and_the_recall_rank_of_the_diagnostic():
     assert first_rank(order, distance, 500.0) == 2  # pose 0, ranked second
     assert first_rank(order, distance, 1600.0) == 1
     assert first_rank(order, distance, 100.0) is None
+
+
+def test_bench_real_retables_a_run_of_one_fov_mode(tmp_path):
+    """``--retable`` of a run made with ``--fov unknown`` only summarises that mode (it raised on
+    the empty known-fov summary)."""
+    from skyrender.benchmarks.real_localize import main
+
+    data_path("photos", "ch1")
+    rows = [{"photo": f"ch1/p{k}", "fov_mode": "unknown", "status": "localized", "confidence": 0.99,
+             "seconds": 100.0 + k, "error_m": 150.0 * (k + 1)} for k in range(2)]
+    with open(tmp_path / "bench-real-validation-t.json", "w") as f:
+        json.dump({"commit": "abc", "cpus": 2, "side": "validation", "photos": rows}, f)
+    assert main(["--side", "validation", "--tag", "t", "--out", str(tmp_path), "--retable"]) == 0
+    text = (tmp_path / "bench-real-validation-t.txt").read_text()
+    assert "unknown fov: 2 photos; within 100 m 0 %, 250 m 50 %, 1 km 100 %" in text
+    assert "\nknown fov" not in text

@@ -260,7 +260,8 @@ def main(argv=None) -> int:
         report = {"commit": commit, "cpus": os.cpu_count(), "side": args.side, "photos": rows}
         if args.set or args.no_abstain:
             report["overrides"] = {"set": json.loads(args.set) if args.set else None, "no_abstain": args.no_abstain}
-    report["summary"] = {m: summary([r for r in report["photos"] if r["fov_mode"] == m]) for m in args.fov}
+    modes = [m for m in args.fov if any(r["fov_mode"] == m for r in report["photos"])]  # a run of one mode: that one
+    report["summary"] = {m: summary([r for r in report["photos"] if r["fov_mode"] == m]) for m in modes}
     text = table(report)
     print(text)
     os.makedirs(args.out, exist_ok=True)

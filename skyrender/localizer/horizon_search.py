@@ -134,6 +134,17 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
     return cost, offset_at
 
 
+def centre_indices(horizons: Horizons, xy: np.ndarray) -> np.ndarray:
+    """Indices of the horizon centres at positions ``xy`` (M, 2) (m; the x, y of poses
+    :func:`horizon_poses` made); -1 where no centre lies within a metre."""
+    if len(xy) == 0 or len(horizons) == 0:
+        return np.zeros(len(xy), np.int64)
+    from scipy.spatial import cKDTree
+
+    d, i = cKDTree(horizons.centres[:, :2]).query(np.asarray(xy, np.float64)[:, :2])
+    return np.where(d <= 1.0, i, -1).astype(np.int64)
+
+
 def smallest(cost: np.ndarray, k: int) -> np.ndarray:
     """Flat indices of the ``k`` smallest entries of ``cost`` (N, B), by cost then index (so ties
     are broken the same on every machine). The k-th smallest of the N row minima bounds them
@@ -151,15 +162,22 @@ def smallest(cost: np.ndarray, k: int) -> np.ndarray:
 
 
 def horizon_poses(horizons: Horizons, skyline: np.ndarray, weights: np.ndarray, intrinsics: Intrinsics, dem,
-                  height: float, params: HorizonSearchParams = HorizonSearchParams()) -> tuple[np.ndarray, np.ndarray]:
+                  height: float, params: HorizonSearchParams = HorizonSearchParams(),
+                  centres: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Poses (K, 6) of the best (centre, azimuth) pairs of each window, camera ``height``
     m above the centre's ground, pan = azimuth, tilt = the tried tilt + fitted offset,
     swing 0; and their costs (K,) (deg^2). Empty when the skyline is too short for any
-    window."""
+    window. ``centres``: indices of the horizon centres searched (None: every one); the
+    search over a subset costs in proportion to its size."""
     n_bins = horizons.elevation.shape[1]
     if len(horizons) == 0:
         return np.zeros((0, 6)), np.zeros(0)
     spectra = horizons.spectra
+    if centres is not None:
+        centres = np.unique(np.asarray(centres, np.int64))  # ascending: ties still break by centre index
+        if len(centres) == 0:
+            return np.zeros((0, 6)), np.zeros(0)
+        spectra = (spectra[0][centres], spectra[1][centres])
     flats, costs, tilts = [], [], []  # every window's best (centre, azimuth) pairs, in the order found
     for tilt in params.tilts:
         bins, elevation, w = skyline_directions(skyline, weights, intrinsics, horizons.bin_deg, tilt)
@@ -189,6 +207,8 @@ def horizon_poses(horizons: Horizons, skyline: np.ndarray, weights: np.ndarray, 
     _, first_seen = np.unique(flat, return_index=True)  # aligned with keys (both sorted by key)
     pick = pick[np.lexsort((first_seen, cost[pick]))]
     centre, azimuth = np.divmod(flat[pick], n_bins)
-    centres = camera_centres(dem, horizons.centres[centre, :2], height)
-    poses = np.column_stack([centres, azimuth * horizons.bin_deg, tilt[pick], np.zeros(len(pick))])
+    if centres is not None:
+        centre = centres[centre]
+    xyz = camera_centres(dem, horizons.centres[centre, :2], height)
+    poses = np.column_stack([xyz, azimuth * horizons.bin_deg, tilt[pick], np.zeros(len(pick))])
     return poses, cost[pick]

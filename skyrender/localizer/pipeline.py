@@ -42,7 +42,7 @@ from ..features.skyline import SkylineParams
 from ..model import Model
 from ..render import Terrain, render_skylines
 from .constraints import in_image_geometry, interfeature_visibility, prior_in_view, segments_in_sky, skyline_limit
-from .horizon_search import HorizonSearchParams, horizon_poses
+from .horizon_search import HorizonSearchParams, centre_indices, horizon_poses
 from .hypotheses import Hypotheses, generate_hypotheses
 from .pose_solver import solve_poses
 from .refinement import Refined, RefineParams, local_rescore, refine_pose
@@ -129,6 +129,8 @@ class LocalizeParams:
     horizon: HorizonSearchParams = field(default_factory=HorizonSearchParams)
     fov_candidates: tuple = FOV_CANDIDATES  # unknown fov: horizontal fovs (deg) tried first
     horizon_fov_step: tuple = (5.0, 2.5, 1.25)  # unknown fov: probes around the best fov of the far-horizon search
+    # ... which search only the horizon centres of the poses kept at the fovs tried before (False: every centre)
+    fov_probes_on_found: bool = True
     # far-horizon poses: the best this many by each ranking are moved to the best of a rerank_grid^2
     # grid +-rerank_half_m (m) around them, that score their first ranking (0: off; a probe, not in
     # the photo preset: experiments/ch1/README.md)
@@ -461,17 +463,19 @@ def _three_point_hypotheses(search: _Search, peak_sizes: np.ndarray) -> Hypothes
 
 def _far_horizon_candidates(search: _Search) -> None:
     """Stage 3c: poses from the far-horizon search at each fov tried (bisected around the
-    best when the fov is unknown), verified; the best of the best-fitting fov (two fovs
-    when unknown) join the candidates."""
+    best when the fov is unknown: those probes search only the horizon centres found at the
+    fovs before, ``LocalizeParams.fov_probes_on_found``), verified; the best of the
+    best-fitting fov (two fovs when unknown) join the candidates."""
     params, stats, features = search.params, search.stats, search.model.features.xyz
     verified = {}  # fov -> (f_px, poses, plain score, second ranking)
 
-    def verify_at(fov_i: float) -> float:
-        """Far-horizon poses at one fov, verified; returns their best plain score (px)."""
+    def verify_at(fov_i: float, centres: np.ndarray | None = None) -> float:
+        """Far-horizon poses at one fov (from ``centres`` only, when given), verified; returns
+        their best plain score (px)."""
         k_i = search.intrinsics(fov_i)
         with stats.timed("horizon_search"):
             poses, cost = horizon_poses(search.model.horizons, search.sky, search.weights, k_i, search.model.dem,
-                                        search.height, params.horizon)
+                                        search.height, params.horizon, centres=centres)
             if search.in_view is not None and len(poses):
                 seen = prior_in_view(poses, features[search.in_view], search.sky, k_i, params.limit_tol_px,
                                      search.curvature)
@@ -490,7 +494,13 @@ def _far_horizon_candidates(search: _Search) -> None:
     for fov_i in search.fovs:
         verify_at(fov_i)
     if search.fov is None:
-        _narrow_fov(verified, verify_at, params.horizon_fov_step)
+        probe = verify_at
+        if params.fov_probes_on_found:
+            def probe(fov_i: float) -> float:  # the place is found at the coarse fovs; a probe only picks the fov
+                xy = np.concatenate([v[1][:, :2] for v in verified.values()])
+                found = centre_indices(search.model.horizons, xy)
+                return verify_at(fov_i, found[found >= 0])
+        _narrow_fov(verified, probe, params.horizon_fov_step)
     # a wrong focal length scales the skyline's azimuths: the best fits pick the fov
     for fov_i in sorted(verified, key=lambda f: _best_of(verified[f][2]))[: 1 if search.fov is not None else 2]:
         f_px, poses, score, trusted = verified[fov_i]
