@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -831,6 +832,30 @@ def test_refinement_fits_the_camera_height_within_its_bound(scene, views):
     assert 2.0 < height_of(free) <= 42.0 + 1e-6
     assert abs(height_of(free) - 25.0) < abs(height_of(fixed) - 25.0)
     assert free.score <= fixed.score
+
+
+@pytest.mark.parametrize("terms, roll", [(2, math.inf), (3, math.inf), (2, 8.0)])
+def test_horizon_costs_in_blocks_of_centres_are_the_whole_arrays_to_the_bit(monkeypatch, terms, roll):
+    """:func:`horizon_costs` works through the centres in blocks (on all cores): any block size
+    gives the costs and fitted offsets of one block holding every centre, to the bit."""
+    import scipy.fft
+
+    from skyrender.localizer import horizon_search
+
+    rng = np.random.default_rng(5)
+    n_bins, bin_deg = 360, 1.0
+    P = np.cumsum(rng.normal(0, 0.3, (301, n_bins)), axis=1).astype(np.float32)
+    spectra = scipy.fft.rfft(P, axis=1), scipy.fft.rfft(P * P, axis=1)
+    bins = np.arange(-25, 26)
+    elevation, weights = rng.normal(1.0, 0.5, len(bins)), rng.uniform(0.1, 1.0, len(bins))
+    flat = rng.choice(P.size, 50, replace=False)
+    out = {}
+    for rows in (10 ** 6, 64, 7):
+        monkeypatch.setattr(horizon_search, "COST_BLOCK_ROWS", rows)
+        cost, offset_at = horizon_search.horizon_costs(spectra, n_bins, bins, elevation, weights, bin_deg, terms, roll)
+        out[rows] = (cost, offset_at(flat))
+    for rows in (64, 7):
+        assert np.array_equal(out[rows][0], out[10 ** 6][0]) and np.array_equal(out[rows][1], out[10 ** 6][1])
 
 
 def test_horizon_costs_with_a_bounded_roll_equal_a_direct_fit_with_the_slope_held():

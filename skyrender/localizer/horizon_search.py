@@ -24,6 +24,8 @@ window's best (centre, azimuth) pairs become poses for verification.
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,6 +34,10 @@ import scipy.fft
 from ..camera import Intrinsics, pixel_directions
 from ..model import Horizons
 from .pose_solver import camera_centres
+
+#: Horizon centres per block of :func:`horizon_costs` (blocks run on all cores, their temporaries
+#: small enough to stay in the cache).
+COST_BLOCK_ROWS = 2048
 
 #: Windows of the photo's skyline matched on their own (fractions of its azimuth span).
 WINDOWS = ((0.0, 1.0), (0.0, 0.65), (0.35, 1.0), (0.0, 0.5), (0.5, 1.0))
@@ -88,42 +94,60 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
         np.add.at(g, idx, values)
         return np.conj(scipy.fft.rfft(g)).astype(np.complex64)
 
-    def correlate(spec: np.ndarray, conj_g: np.ndarray) -> np.ndarray:  # out[:, p] = sum_i P[:, i + p] g[i]
-        return scipy.fft.irfft(spec * conj_g, n=n_bins, axis=1, workers=-1)
-
-    def correlate2(spec_a, conj_a, spec_b, conj_b) -> np.ndarray:  # the sum of two, in one inverse transform
-        return scipy.fft.irfft(spec_a * conj_a + spec_b * conj_b, n=n_bins, axis=1, workers=-1)
-
     w = weights
     # sum w (P - e)^2 = sum w P^2 - 2 sum w e P + sum w e^2
-    cost = correlate2(spec_p2, spread(w), spec_p, spread(-2.0 * w * elevation))
-    cost += np.float32((w * elevation ** 2).sum())
+    g_p2, g_p, sum_we2 = spread(w), spread(-2.0 * w * elevation), np.float32((w * elevation ** 2).sum())
     # r = X^T W (P - e) per (centre, azimuth); the fit removes r^T gram^-1 r
-    r = []
-    for k in range(terms):
-        r.append(correlate(spec_p, spread(w * X[:, k])))
-        r[k] -= np.float32((w * X[:, k] * elevation).sum())
+    g_r = [spread(w * X[:, k]) for k in range(terms)]
+    sum_r = [np.float32((w * X[:, k] * elevation).sum()) for k in range(terms)]
     inv = np.linalg.inv((X * w[:, None]).T @ X + 1e-9 * np.eye(terms)).astype(np.float32)
-    term = np.empty_like(cost)
-    for i in range(terms):
-        for j in range(i, terms):
-            np.multiply(r[i], r[j], out=term)
-            term *= inv[i, j] * (1.0 if i == j else 2.0)
-            cost -= term
     bounded = terms > 1 and math.isfinite(max_swing_deg)
     max_slope = np.float32(np.tan(np.radians(max_swing_deg)) * 180.0 / np.pi) if bounded else None  # deg per rad
+    norm = np.float32(max(float(w.sum()), 1e-9))
 
     def slope_excess(slope: np.ndarray) -> np.ndarray:  # in place: how far each slope lies beyond the bound
         slope -= np.clip(slope, -max_slope, max_slope)
         return slope
 
-    if bounded:
-        excess = slope_excess(sum(inv[1, k] * r[k] for k in range(terms)))
-        np.multiply(excess, excess, out=excess)
-        excess *= np.float32(1.0 / inv[1, 1])
-        cost += excess
-        del excess
-    cost /= np.float32(max(float(w.sum()), 1e-9))
+    N = spec_p.shape[0]
+    cost = np.empty((N, n_bins), np.float32)
+    r = [np.empty((N, n_bins), np.float32) for _ in range(terms)]
+
+    def rows(lo: int, hi: int) -> None:
+        """Rows lo:hi of ``cost`` and ``r``: every operation is row-wise, so blocks give the
+        whole arrays' values to the bit, and a block's temporaries stay in the cache."""
+        def correlate(spec, conj_g):  # out[:, p] = sum_i P[:, i + p] g[i]
+            return scipy.fft.irfft(spec[lo:hi] * conj_g, n=n_bins, axis=1, workers=1)
+
+        c = scipy.fft.irfft(spec_p2[lo:hi] * g_p2 + spec_p[lo:hi] * g_p, n=n_bins, axis=1, workers=1)
+        c += sum_we2
+        rk = []
+        for k in range(terms):
+            rk.append(correlate(spec_p, g_r[k]))
+            rk[k] -= sum_r[k]
+        term = np.empty_like(c)
+        for i in range(terms):
+            for j in range(i, terms):
+                np.multiply(rk[i], rk[j], out=term)
+                term *= inv[i, j] * (1.0 if i == j else 2.0)
+                c -= term
+        if bounded:
+            excess = slope_excess(sum(inv[1, k] * rk[k] for k in range(terms)))
+            np.multiply(excess, excess, out=excess)
+            excess *= np.float32(1.0 / inv[1, 1])
+            c += excess
+        c /= norm
+        cost[lo:hi] = c
+        for k in range(terms):
+            r[k][lo:hi] = rk[k]
+
+    blocks = [(lo, min(lo + COST_BLOCK_ROWS, N)) for lo in range(0, N, COST_BLOCK_ROWS)]
+    if len(blocks) > 1 and (os.cpu_count() or 1) > 1:
+        with ThreadPoolExecutor(max_workers=min(os.cpu_count() or 1, len(blocks))) as pool:
+            list(pool.map(lambda b: rows(*b), blocks))
+    else:
+        for b in blocks:
+            rows(*b)
 
     def offset_at(flat: np.ndarray) -> np.ndarray:  # the fitted offset (deg) at flat indices, computed there only
         offset = sum(inv[0, k] * r[k].ravel()[flat] for k in range(terms))
