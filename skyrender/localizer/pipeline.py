@@ -45,7 +45,7 @@ from .constraints import in_image_geometry, interfeature_visibility, prior_in_vi
 from .horizon_search import HorizonSearchParams, centre_indices, horizon_poses
 from .hypotheses import Hypotheses, generate_hypotheses
 from .pose_solver import solve_poses
-from .refinement import Refined, RefineParams, local_rescore, refine_pose
+from .refinement import Refined, RefineParams, WeakSweepParams, local_rescore, refine_pose, weak_axis_sweep
 from .verification import ScoreParams, verify_poses
 
 #: Focal lengths tried when the field of view is unknown (horizontal fov, degrees).
@@ -141,6 +141,9 @@ class LocalizeParams:
     refine_fov: bool = False  # a given fov is only a start (e.g. from EXIF): refinement fits the focal length too
     score: ScoreParams = field(default_factory=ScoreParams)
     refine: RefineParams = field(default_factory=RefineParams)  # the refinement's search set-up
+    # before abstaining, the first chunks' weakly held three-point poses are moved along their weak axis
+    # (bench-localize view 7: the right hypothesis solved 283 m off, verified 272nd of 318; swept, first at 4 m)
+    weak_sweep: WeakSweepParams = field(default_factory=WeakSweepParams)
 
     @classmethod
     def for_photos(cls) -> "LocalizeParams":
@@ -389,6 +392,8 @@ class _Search:
     stats: LocalizeStats
     curvature: bool
     candidates: list = field(default_factory=list)
+    # the first chunks' verified three-point poses, for the weak-axis sweep: (poses, points, image peaks, fov)
+    swept_pool: list = field(default_factory=list)
     solver: object = solve_poses  # solve_poses, or a skyrender.scale.SplitSolver spreading it over a cluster
 
     def intrinsics(self, fov: float) -> Intrinsics:
@@ -441,6 +446,9 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     if params.use_horizons and len(model.horizons):
         _far_horizon_candidates(search)
     accepted = _three_point_rounds(search, hyps)
+    if accepted is None and search.swept_pool:
+        with stats.timed("weak_sweep"):
+            _weak_axis_candidates(search)
     with stats.timed("refinement"):
         final = params.final_refinements if accepted is None else 0
         for cand in _next_to_refine(search.candidates, final, params, budgeted=False):
@@ -532,10 +540,11 @@ def rerank_far_horizon(terrain, poses: np.ndarray, score: np.ndarray, second: np
     return pick, moved, rescored
 
 
-def _screen_chunk(search: _Search, chunk: Hypotheses, fov_i: float) -> None:
+def _screen_chunk(search: _Search, chunk: Hypotheses, fov_i: float, keep_for_sweep: bool = False) -> None:
     """Stages 3b-4a for one chunk of hypotheses at one fov: solve the poses, prune them
     by residual, geometry, prior, "skyline is the limit" and inter-feature visibility,
-    verify the survivors and add the best as candidates."""
+    verify the survivors and add the best as candidates (and, ``keep_for_sweep``, keep
+    every verified one for :func:`_weak_axis_candidates`)."""
     params, stats, features = search.params, search.stats, search.model.features.xyz
     k_i = search.intrinsics(fov_i)
     with stats.timed("pose_solver"):
@@ -566,6 +575,21 @@ def _screen_chunk(search: _Search, chunk: Hypotheses, fov_i: float) -> None:
         stats.verified += len(kept)
         _add_candidates(search.candidates, poses[kept], score, trusted, k_i.f_px, features[chunk.features[kept]],
                         params)
+    if keep_for_sweep:
+        search.swept_pool.append((poses[kept], features[chunk.features[kept]], search.peak_uv[chunk.image[kept]], fov_i))
+
+
+def _weak_axis_candidates(search: _Search) -> None:
+    """Stage 4a again, for a search about to abstain: the first chunks' weakly held
+    three-point poses moved along their weak axis (:func:`weak_axis_sweep`) join the
+    candidates, so the final refinements see them."""
+    params = search.params
+    for poses, points, image_uv, fov_i in search.swept_pool:
+        k_i = search.intrinsics(fov_i)
+        swept, moved, score, trusted = weak_axis_sweep(search.terrain, poses, points, image_uv, k_i, search.height,
+                                                       search.sky, search.weights, params.weak_sweep, params.score)
+        search.stats.verified += len(swept)
+        _add_candidates(search.candidates, moved, score, trusted, k_i.f_px, points[swept], params)
 
 
 def _three_point_rounds(search: _Search, hyps: Hypotheses) -> _Candidate | None:
@@ -584,7 +608,7 @@ def _three_point_rounds(search: _Search, hyps: Hypotheses) -> _Candidate | None:
             break
         chunk = hyps.take(slice(start, start + params.chunk))
         for fov_i in search.fovs:
-            _screen_chunk(search, chunk, fov_i)
+            _screen_chunk(search, chunk, fov_i, keep_for_sweep=start < params.weak_sweep.chunks * params.chunk)
         search.candidates = [c for from_peaks in (True, False) for c in _best_by_either(
             [c for c in search.candidates if (c.points is not None) == from_peaks], 8 * params.final_refinements)]
         with search.stats.timed("refinement"):

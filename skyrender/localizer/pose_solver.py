@@ -176,21 +176,23 @@ def refine_positions(dem: DEM, xy: np.ndarray, world: np.ndarray, measured: np.n
 
 def position_uncertainty(dem: DEM, xy: np.ndarray, world: np.ndarray, height: float, c: float,
                          angle_noise_rad: float) -> tuple[np.ndarray, np.ndarray]:
-    """Axes and standard deviations (m) of a three-point position (x, y) when the
+    """Axes and standard deviations (m) of three-point positions (x, y) when the
     inter-bearing angles carry ``angle_noise_rad`` of noise.
 
-    xy : (2,) position; world : (3, 3) its matched points. From the Jacobian J of the
-    three angles with respect to (x, y): covariance = noise^2 (J^T J)^-1. Distant
-    peaks seen from 2 m leave hundreds of metres of doubt, and the long axis is
-    rarely the viewing direction. Returns (axes (2, 2), columns weak then strong;
-    sigma (2,) in metres, weak first).
+    xy : (2,) position, or (N, 2); world : (3, 3) its matched points, or (N, 3, 3). From
+    the Jacobian J of the three angles with respect to (x, y): covariance = noise^2
+    (J^T J)^-1. Distant peaks seen from 2 m leave hundreds of metres of doubt, and the
+    long axis is rarely the viewing direction. Returns (axes (2, 2), columns weak then
+    strong; sigma (2,) in metres, weak first), or (N, 2, 2) and (N, 2) for N positions.
     """
-    _, jx, jy = _angles_and_jacobian(dem, np.asarray(xy, np.float64)[None], world[None], height, c)
-    J = np.column_stack([jx[0], jy[0]])
-    eig, axes = np.linalg.eigh(J.T @ J)  # ascending: weak axis first
+    xy, world = np.asarray(xy, np.float64), np.asarray(world, np.float64)
+    one = xy.ndim == 1
+    _, jx, jy = _angles_and_jacobian(dem, xy.reshape(-1, 2), world.reshape(-1, 3, 3), height, c)
+    J = np.stack([jx, jy], axis=-1)  # (N, 3 angles, 2)
+    eig, axes = np.linalg.eigh(np.einsum("nki,nkj->nij", J, J))  # ascending: weak axis first
     with np.errstate(divide="ignore"):
         sigma = angle_noise_rad / np.sqrt(np.maximum(eig, 0.0))
-    return axes, sigma
+    return (axes[0], sigma[0]) if one else (axes, sigma)
 
 
 def _unit(a: np.ndarray) -> np.ndarray:

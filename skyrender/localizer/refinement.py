@@ -25,7 +25,7 @@ from ..render import Terrain, render_skylines
 from ..render.skyline import strided_skylines
 from ..render.visibility import line_of_sight
 from .pose_solver import camera_centres, image_bearings, poses_at, position_uncertainty
-from .verification import SHIFTS_PX, ScoreParams, align_skylines, column_errors, score_skylines
+from .verification import SHIFTS_PX, ScoreParams, align_skylines, column_errors, score_skylines, verify_poses
 
 #: Forward-difference steps: metres for x, y; degrees for the angles; relative for f.
 STEP_XY_M = 2.0
@@ -124,6 +124,72 @@ def resection_sweep(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, 
     rendered, cols = strided_skylines(terrain, poses, k_full, refine.sweep_stride, tol_px=0.25)
     score, _ = score_skylines(rendered, image_skyline[cols], weights[cols], params)
     return best_apart(poses, score, refine.search_beam, spacing), float(score.min()), spacing, n_pos
+
+
+@dataclass(frozen=True)
+class WeakSweepParams:
+    """The weak-axis sweep of three-point poses before the localizer abstains (:func:`weak_axis_sweep`).
+
+    ``chunks``: the verified three-point poses of the first this many chunks (the most
+    probable hypotheses) are swept (0: off). A pose whose position doubt (:func:`position_uncertainty`,
+    apex noise ``apex_noise_px``) exceeds ``min_sigma_m`` along its weak axis is moved along it
+    out to ``sigmas`` of that doubt (at most ``max_half_m``), ``spacing_m`` apart, turned to its
+    three points at each step and verified on every ``stride``-th column.
+    """
+
+    chunks: int = 1
+    min_sigma_m: float = 50.0
+    apex_noise_px: float = 2.0
+    sigmas: float = 2.5
+    max_half_m: float = 600.0
+    spacing_m: float = 10.0  # a camera 2 m above rough ground matches its foreground within ~15 m
+    stride: int = 16
+
+
+def weak_axis_sweep(terrain: Terrain, poses: np.ndarray, points: np.ndarray, image_uv: np.ndarray,
+                    intrinsics: Intrinsics, height: float, image_skyline: np.ndarray, weights: np.ndarray,
+                    sweep: WeakSweepParams = WeakSweepParams(),
+                    params: ScoreParams = ScoreParams()) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Weakly held three-point poses moved along their weak axis to where their skyline fits best.
+
+    Three peaks close together in the image fix the camera's position to within hundreds of
+    metres along one axis: solved from peaks a pixel off, the right hypothesis lands a few
+    hundred metres from the camera, where the near foreground differs and its verification
+    score ranks it among the wrong ones. Each such pose is moved along that axis, turned at
+    every step so that its image peaks ``image_uv`` (P, 3, 2) px point at its ``points``
+    (P, 3, 3) m, and verified (:func:`verify_poses`, aligned, every ``sweep.stride``-th column).
+
+    Returns (indices of the swept poses (S,), their best poses (S, 6), plain scores (S,) and
+    trusted scores (S,) in px); empty when none is weakly held."""
+    poses, points = np.asarray(poses, np.float64), np.asarray(points, np.float64)
+    empty = (np.zeros(0, np.int64), np.zeros((0, 6)), np.zeros(0), np.zeros(0))
+    if len(poses) == 0:
+        return empty
+    c = curvature_coeff(terrain.curvature)
+    axes, sigma = position_uncertainty(terrain.dem, poses[:, :2], points, height, c,
+                                       sweep.apex_noise_px / intrinsics.f_px)
+    weak = np.flatnonzero(np.isfinite(sigma[:, 0]) & (sigma[:, 0] > sweep.min_sigma_m))
+    if len(weak) == 0:
+        return empty
+    steps = np.ceil(np.minimum(sweep.sigmas * sigma[weak, 0], sweep.max_half_m) / sweep.spacing_m).astype(np.int64)
+    owner = np.repeat(np.arange(len(weak)), 2 * steps + 1)
+    offset = sweep.spacing_m * np.concatenate([np.arange(-n, n + 1) for n in steps])
+    xy = poses[weak[owner], :2] + offset[:, None] * axes[weak[owner], :, 0]
+    centres = camera_centres(terrain.dem, xy, height)
+    on_dem = np.flatnonzero(np.isfinite(centres[:, 2]))
+    bearings = image_bearings(image_uv[weak], intrinsics.f_px, intrinsics.cx, intrinsics.cy)
+    moved, _, _ = poses_at(centres[on_dem], points[weak[owner[on_dem]]], bearings[owner[on_dem]], c)
+    score, trusted = np.full(len(xy), np.inf), np.full(len(xy), np.inf)
+    score[on_dem], trusted[on_dem] = verify_poses(terrain, moved, intrinsics, image_skyline, weights, sweep.stride,
+                                                  params)
+    full = np.zeros((len(xy), 6))
+    full[on_dem] = moved
+    # each swept pose's best step (the first of equals); the steps of one pose are contiguous
+    start = np.r_[0, np.cumsum(2 * steps + 1)[:-1]]
+    order = np.lexsort((np.arange(len(xy)), score, owner))
+    best = order[start]
+    found = np.isfinite(score[best])
+    return weak[found], full[best[found]], score[best[found]], trusted[best[found]]
 
 
 def best_apart(poses: np.ndarray, score: np.ndarray, beam: int, spacing: float) -> list[np.ndarray]:
