@@ -26,7 +26,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
-from scipy.signal import peak_prominences, peak_widths
 
 GAUSSIAN_AREA_PER_FWHM = float(np.sqrt(np.pi / (4.0 * np.log(2.0))))  # area = this x height x FWHM
 
@@ -48,6 +47,9 @@ class SkylinePeak:
 def gaussian_sizes(height: np.ndarray, apexes: np.ndarray) -> np.ndarray:
     """Areas (px^2) of the Gaussian bumps at samples ``apexes`` of a smoothed height profile
     (px): each one's prominence times its width at half prominence, times sqrt(pi / (4 ln 2))."""
+    # imported here: scipy.signal (with the scipy.stats it pulls in) costs every command 0.6-0.8 s to import
+    from scipy.signal import peak_prominences, peak_widths
+
     apexes = np.asarray(apexes, dtype=np.intp)
     if len(apexes) == 0:
         return np.zeros(0)
