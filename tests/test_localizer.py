@@ -16,7 +16,7 @@ from skyrender.localizer.constraints import segments_in_sky, skyline_limit
 from skyrender.localizer.hypotheses import PERMUTATIONS, generate_hypotheses, image_triples, model_triples
 from skyrender.localizer.pipeline import search_stalled
 from skyrender.localizer.pose_solver import position_uncertainty, resection_2d, rotations_from_bearings, solve_poses
-from skyrender.localizer.refinement import local_rescore, refine_pose, resection_sweep, weak_axis_sweep
+from skyrender.localizer.refinement import WeakSweepParams, local_rescore, refine_pose, resection_sweep, weak_axis_sweep
 from skyrender.localizer.verification import ScoreParams, align_skylines, score_skylines, trust_of_distance
 from skyrender.model import build_model
 from skyrender.render import Terrain, render_skylines
@@ -354,6 +354,10 @@ def test_weak_axis_sweep_moves_weakly_held_poses_into_the_skyline_s_dip(scene, v
         assert np.all(score <= where_solved + 0.05)
         best = np.argmin(score)
         assert score[best] < 0.3 and np.hypot(*(moved[best, :2] - truth.array()[:2])) < 80.0
+        # a budget of positions sweeps the first poses only, the same way
+        few = weak_axis_sweep(terrain, poses, points, peaks, K, 2.0, sky, np.ones(640), WeakSweepParams(max_positions=150))
+        assert 1 <= len(few[0]) < len(swept) and np.array_equal(few[0], swept[:len(few[0])])
+        np.testing.assert_array_equal(few[2], score[:len(few[0])])
 
 
 def test_refinement_gives_up_after_the_sweep_on_a_wrong_triple(scene, views):

@@ -30,7 +30,7 @@ import os
 import resource
 import time
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -584,10 +584,11 @@ def _weak_axis_candidates(search: _Search) -> None:
     three-point poses moved along their weak axis (:func:`weak_axis_sweep`) join the
     candidates, so the final refinements see them."""
     params = search.params
+    share = replace(params.weak_sweep, max_positions=params.weak_sweep.max_positions // len(search.swept_pool))
     for poses, points, image_uv, fov_i in search.swept_pool:
         k_i = search.intrinsics(fov_i)
         swept, moved, score, trusted = weak_axis_sweep(search.terrain, poses, points, image_uv, k_i, search.height,
-                                                       search.sky, search.weights, params.weak_sweep, params.score)
+                                                       search.sky, search.weights, share, params.score)
         search.stats.verified += len(swept)
         _add_candidates(search.candidates, moved, score, trusted, k_i.f_px, points[swept], params)
 

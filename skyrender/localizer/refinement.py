@@ -134,7 +134,8 @@ class WeakSweepParams:
     probable hypotheses) are swept (0: off). A pose whose position doubt (:func:`position_uncertainty`,
     apex noise ``apex_noise_px``) exceeds ``min_sigma_m`` along its weak axis is moved along it
     out to ``sigmas`` of that doubt (at most ``max_half_m``), ``spacing_m`` apart, turned to its
-    three points at each step and verified on every ``stride``-th column.
+    three points at each step and verified on every ``stride``-th column; at most ``max_positions``
+    positions in all (~3 s), the poses taken in the order given (the most probable hypotheses first).
     """
 
     chunks: int = 1
@@ -144,6 +145,9 @@ class WeakSweepParams:
     max_half_m: float = 600.0
     spacing_m: float = 10.0  # a camera 2 m above rough ground matches its foreground within ~15 m
     stride: int = 16
+    # bench-localize view 7 needed 15,706 (its first chunk's 194 weak poses); a whole tile's first chunk held
+    # enough for 44 s of sweeping (experiments/scale/README.md)
+    max_positions: int = 16_000
 
 
 def weak_axis_sweep(terrain: Terrain, poses: np.ndarray, points: np.ndarray, image_uv: np.ndarray,
@@ -172,6 +176,10 @@ def weak_axis_sweep(terrain: Terrain, poses: np.ndarray, points: np.ndarray, ima
     if len(weak) == 0:
         return empty
     steps = np.ceil(np.minimum(sweep.sigmas * sigma[weak, 0], sweep.max_half_m) / sweep.spacing_m).astype(np.int64)
+    within = np.cumsum(2 * steps + 1) <= sweep.max_positions  # the first poses, up to the budget
+    weak, steps = weak[within], steps[within]
+    if len(weak) == 0:
+        return empty
     owner = np.repeat(np.arange(len(weak)), 2 * steps + 1)
     offset = sweep.spacing_m * np.concatenate([np.arange(-n, n + 1) for n in steps])
     xy = poses[weak[owner], :2] + offset[:, None] * axes[weak[owner], :, 0]
