@@ -873,6 +873,34 @@ def test_refinement_fits_the_camera_height_within_its_bound(scene, views):
     assert free.score <= fixed.score
 
 
+@pytest.mark.parametrize("roll, trusted", [(math.inf, False), (8.0, False), (8.0, True)])
+def test_skylines_aligned_in_blocks_of_poses_are_the_whole_arrays_to_the_bit(monkeypatch, roll, trusted):
+    """:func:`align_skylines` works through many poses in blocks (on all cores), the last one
+    padded: any block size gives the scores, agreements and fitted shifts, offsets and slopes
+    of one block holding every pose, to the bit (NaN columns, trust and a roll bound included)."""
+    from skyrender.localizer import verification
+
+    rng = np.random.default_rng(8)
+    for stride, P in ((4, 1100), (16, 2500)):  # 160 and 40 columns: blocks of 410 and 1,639 rows at least
+        columns = np.arange(stride // 2, 640, stride)
+        image = 200.0 + np.cumsum(rng.normal(0, 2.0, len(columns)))
+        image[:5] = np.nan
+        rendered = image[None, :] + rng.normal(0, 3.0, (P, len(columns))) + rng.normal(0, 10.0, (P, 1))
+        rendered[rng.random(rendered.shape) < 0.02] = np.nan
+        weights = rng.uniform(0.05, 1.0, len(columns))
+        trust = rng.uniform(0.0, 1.0, rendered.shape) if trusted else None
+        swing = rng.uniform(-5.0, 5.0, P)
+        params = ScoreParams(max_swing_deg=roll)
+        out = {}
+        for rows in (10 ** 6, 512, 7):
+            monkeypatch.setattr(verification, "ALIGN_BLOCK_ROWS", rows)
+            out[rows] = align_skylines(rendered, image, columns, 320.0, weights, params=params, trust=trust,
+                                       swing=swing)
+        for rows in (512, 7):
+            for whole, blocked in zip(out[10 ** 6], out[rows]):
+                assert np.array_equal(whole, blocked)
+
+
 @pytest.mark.parametrize("terms, roll", [(2, math.inf), (3, math.inf), (2, 8.0)])
 def test_horizon_costs_in_blocks_of_centres_are_the_whole_arrays_to_the_bit(monkeypatch, terms, roll):
     """:func:`horizon_costs` works through the centres in blocks (on all cores): any block size

@@ -22,6 +22,8 @@ whose own skyline is near poorly, so :func:`verify_poses` gives both scores.
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,6 +34,12 @@ from ..render.skyline import strided_skylines
 
 #: Horizontal shifts (px) tried when aligning a rendered skyline to the photo's.
 SHIFTS_PX = np.arange(-30.0, 30.01, 1.0)
+#: Poses per block of :func:`align_skylines` (blocks run on all cores, their arrays small enough
+#: to stay in the cache).
+ALIGN_BLOCK_ROWS = 512
+#: ... and at least this many elements each (numpy's sums over rows of smaller arrays can differ
+#: in the last bit from a larger array's).
+MIN_BLOCK_ELEMENTS = 1 << 16
 
 
 @dataclass(frozen=True)
@@ -96,13 +104,44 @@ def align_skylines(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray,
     ``swing`` (P,) deg: the poses' roll (None: 0); the slope c is kept to what leaves it
     within ``params.max_swing_deg`` (:func:`slope_bounds`).
     Returns (score, agreement, a, b, c), each (P,).
+
+    Every operation is row-wise, so many poses are aligned in blocks of
+    :data:`ALIGN_BLOCK_ROWS` on all cores (3x faster on 2 cores for a CH1 photo's 4,077
+    far-horizon poses), with the whole arrays' values to the bit: numpy's row sums of an array
+    under 2**16 elements can differ in the last bit from those of a larger one, so every block
+    holds at least that many (the last one padded with its last row).
     """
-    shifts = np.asarray(shifts, np.float64)
     P = len(rendered)
     rendered = np.asarray(rendered, np.float32)  # float32: the alignment is the verification's hot path
     trust = None if trust is None else np.asarray(trust, np.float32)
+    swing = np.zeros(P) if swing is None else np.asarray(swing, np.float64)
+    per_block = max(ALIGN_BLOCK_ROWS, -(-MIN_BLOCK_ELEMENTS // max(rendered.shape[1], 1)))
+    blocks = [(lo, min(lo + per_block, P)) for lo in range(0, P, per_block)]
+    if len(blocks) <= 1 or (os.cpu_count() or 1) == 1:
+        return _align_rows(rendered, image, columns, cx, weights, shifts, params, trust, coarse, swing)
+    out = tuple(np.empty(P) for _ in range(5))
+
+    def rows(lo: int, hi: int) -> None:
+        take = np.minimum(np.arange(lo, lo + per_block), P - 1)  # the last block padded with its last row
+        part = _align_rows(rendered[take], image, columns, cx, weights, shifts, params,
+                           None if trust is None else trust[take], coarse, swing[take])
+        for whole, values in zip(out, part):
+            whole[lo:hi] = values[: hi - lo]
+
+    with ThreadPoolExecutor(max_workers=min(os.cpu_count() or 1, len(blocks))) as pool:
+        list(pool.map(lambda b: rows(*b), blocks))
+    return out
+
+
+def _align_rows(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx: float, weights: np.ndarray,
+                shifts: np.ndarray, params: ScoreParams, trust: np.ndarray | None, coarse: int,
+                swing: np.ndarray) -> tuple:
+    """:func:`align_skylines` of some poses: ``rendered`` (P, n) float32, ``trust`` (P, n) float32
+    or None, ``swing`` (P,) deg."""
+    shifts = np.asarray(shifts, np.float64)
+    P = len(rendered)
     best = (np.full(P, np.inf), np.zeros(P), np.zeros(P), np.zeros(P), np.zeros(P))
-    bounds = slope_bounds(np.zeros(P) if swing is None else swing, params.max_swing_deg)
+    bounds = slope_bounds(swing, params.max_swing_deg)
     coarse = coarse if len(shifts) > 5 * coarse else 1
     for a in shifts[::coarse]:
         best = _better(best, _aligned_at(rendered, image, columns, cx, weights, a, params, trust, bounds))
