@@ -36,7 +36,7 @@ from ..render.skyline import strided_skylines
 SHIFTS_PX = np.arange(-30.0, 30.01, 1.0)
 #: Poses per block of :func:`align_skylines` (blocks run on all cores, their arrays small enough
 #: to stay in the cache).
-ALIGN_BLOCK_ROWS = 512
+ALIGN_BLOCK_ROWS = 128
 #: ... and at least this many elements each (numpy's sums over rows of smaller arrays can differ
 #: in the last bit from a larger array's).
 MIN_BLOCK_ELEMENTS = 1 << 16
@@ -106,8 +106,8 @@ def align_skylines(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray,
     Returns (score, agreement, a, b, c), each (P,).
 
     Every operation is row-wise, so many poses are aligned in blocks of
-    :data:`ALIGN_BLOCK_ROWS` on all cores (3x faster on 2 cores for a CH1 photo's 4,077
-    far-horizon poses), with the whole arrays' values to the bit: numpy's row sums of an array
+    :data:`ALIGN_BLOCK_ROWS` on all cores (2-3x faster on 2 cores: a CH1 photo's 4,077
+    far-horizon poses, a refinement level's 600 poses), with the whole arrays' values to the bit: numpy's row sums of an array
     under 2**16 elements can differ in the last bit from those of a larger one, so every block
     holds at least that many (the last one padded with its last row).
     """
