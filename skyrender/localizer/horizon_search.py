@@ -24,8 +24,6 @@ window's best (centre, azimuth) pairs become poses for verification.
 from __future__ import annotations
 
 import math
-import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,6 +31,7 @@ import scipy.fft
 
 from ..camera import Intrinsics, pixel_directions
 from ..model import Horizons
+from .blocks import in_blocks
 from .pose_solver import camera_centres
 
 #: Horizon centres per block of :func:`horizon_costs` (blocks run on all cores, their temporaries
@@ -141,13 +140,7 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
         for k in range(terms):
             r[k][lo:hi] = rk[k]
 
-    blocks = [(lo, min(lo + COST_BLOCK_ROWS, N)) for lo in range(0, N, COST_BLOCK_ROWS)]
-    if len(blocks) > 1 and (os.cpu_count() or 1) > 1:
-        with ThreadPoolExecutor(max_workers=min(os.cpu_count() or 1, len(blocks))) as pool:
-            list(pool.map(lambda b: rows(*b), blocks))
-    else:
-        for b in blocks:
-            rows(*b)
+    in_blocks(N, COST_BLOCK_ROWS, rows)
 
     def offset_at(flat: np.ndarray) -> np.ndarray:  # the fitted offset (deg) at flat indices, computed there only
         offset = sum(inv[0, k] * r[k].ravel()[flat] for k in range(terms))

@@ -180,8 +180,10 @@ def weak_axis_sweep(terrain: Terrain, poses: np.ndarray, points: np.ndarray, ima
     weak, steps = weak[within], steps[within]
     if len(weak) == 0:
         return empty
-    owner = np.repeat(np.arange(len(weak)), 2 * steps + 1)
-    offset = sweep.spacing_m * np.concatenate([np.arange(-n, n + 1) for n in steps])
+    counts = 2 * steps + 1  # the steps of one pose are contiguous, from -steps to +steps
+    owner = np.repeat(np.arange(len(weak)), counts)
+    start = np.r_[0, np.cumsum(counts)[:-1]]
+    offset = sweep.spacing_m * (np.arange(len(owner)) - start[owner] - steps[owner])
     xy = poses[weak[owner], :2] + offset[:, None] * axes[weak[owner], :, 0]
     centres = camera_centres(terrain.dem, xy, height)
     on_dem = np.flatnonzero(np.isfinite(centres[:, 2]))
@@ -192,8 +194,7 @@ def weak_axis_sweep(terrain: Terrain, poses: np.ndarray, points: np.ndarray, ima
                                                   params)
     full = np.zeros((len(xy), 6))
     full[on_dem] = moved
-    # each swept pose's best step (the first of equals); the steps of one pose are contiguous
-    start = np.r_[0, np.cumsum(2 * steps + 1)[:-1]]
+    # each swept pose's best step (the first of equals)
     order = np.lexsort((np.arange(len(xy)), score, owner))
     best = order[start]
     found = np.isfinite(score[best])

@@ -22,8 +22,6 @@ whose own skyline is near poorly, so :func:`verify_poses` gives both scores.
 from __future__ import annotations
 
 import math
-import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,6 +29,7 @@ import numpy as np
 from ..camera import Intrinsics
 from ..render import Terrain
 from ..render.skyline import strided_skylines
+from .blocks import in_blocks
 
 #: Horizontal shifts (px) tried when aligning a rendered skyline to the photo's.
 SHIFTS_PX = np.arange(-30.0, 30.01, 1.0)
@@ -116,8 +115,7 @@ def align_skylines(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray,
     trust = None if trust is None else np.asarray(trust, np.float32)
     swing = np.zeros(P) if swing is None else np.asarray(swing, np.float64)
     per_block = max(ALIGN_BLOCK_ROWS, -(-MIN_BLOCK_ELEMENTS // max(rendered.shape[1], 1)))
-    blocks = [(lo, min(lo + per_block, P)) for lo in range(0, P, per_block)]
-    if len(blocks) <= 1 or (os.cpu_count() or 1) == 1:
+    if P <= per_block:
         return _align_rows(rendered, image, columns, cx, weights, shifts, params, trust, coarse, swing)
     out = tuple(np.empty(P) for _ in range(5))
 
@@ -128,8 +126,7 @@ def align_skylines(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray,
         for whole, values in zip(out, part):
             whole[lo:hi] = values[: hi - lo]
 
-    with ThreadPoolExecutor(max_workers=min(os.cpu_count() or 1, len(blocks))) as pool:
-        list(pool.map(lambda b: rows(*b), blocks))
+    in_blocks(P, per_block, rows)
     return out
 
 

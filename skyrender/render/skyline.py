@@ -23,6 +23,7 @@ so its Python tracing is paid once.
 
 from __future__ import annotations
 
+import gc
 import math
 from types import SimpleNamespace
 
@@ -109,9 +110,17 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
 
         # one recording per terrain (its scene and buffers): Dr.Jit's default warns after 10, a bench-real run has more
         frozen = _frozen_bisect[static] = dr.freeze(bisect, warn_after=64)
-    result = frozen(terrain.scene, mi.Float(basis.astype(np.float32).ravel()), dr.arange(mi.UInt32, P * W),
-                    dr.opaque(mi.Float, terrain.max_distance), dr.opaque(mi.Float, near_m), terrain.ground,
-                    mi.Float(terrain.grid))
+    # no garbage collection while Dr.Jit records or replays the kernel: once (make test, 2026-12-03) the
+    # process aborted in a collection started inside the recording (not reproduced since); collections wait
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        result = frozen(terrain.scene, mi.Float(basis.astype(np.float32).ravel()), dr.arange(mi.UInt32, P * W),
+                        dr.opaque(mi.Float, terrain.max_distance), dr.opaque(mi.Float, near_m), terrain.ground,
+                        mi.Float(terrain.grid))
+    finally:
+        if collecting:
+            gc.enable()
     if with_distance:
         return tuple(np.array(r, dtype=np.float64).reshape(P, W) for r in result)
     return np.array(result, dtype=np.float64).reshape(P, W)
