@@ -14,7 +14,7 @@ from skyrender.benchmarks.skyline_photos import column_errors, otsu_baseline, tr
 from skyrender.cli import main
 from skyrender.datasets.real_photos import truth_from_mask, truth_from_red_line
 from skyrender.features import as_rgb8, extract_skyline, load_photo, skyline_peaks
-from skyrender.features.sky import clear_sky_field, hazy_ridge_logit, shadowed_snow_logit
+from skyrender.features.sky import _fit_gmm, clear_sky_field, hazy_ridge_logit, mixture_log_density, shadowed_snow_logit
 from skyrender.render.photo import Look, render_photo
 
 from .conftest import data_path
@@ -111,6 +111,19 @@ def test_clear_sky_field_fits_a_smooth_sky_and_ignores_clouds():
     hazy = np.dstack([lab + [-1.0, 0.0, 14.0], np.zeros((H, W, 2))]).astype(np.float32)
     assert hazy_ridge_logit(hazy, field, sigma).min() > 5  # as light as the sky, 14 b* units greyer
     assert hazy_ridge_logit(features, field, sigma).max() == 0.0  # the cloud is greyer but brighter
+
+
+def test_mixture_density_is_scikit_learns_and_the_same_to_the_bit_on_one_core_or_all(monkeypatch):
+    """The colour mixtures' log density (two matrix products per chunk of pixels, the chunks on
+    all cores) is what scikit-learn's ``score_samples`` gives, and the threads change no bit."""
+    rng = np.random.default_rng(3)
+    samples = np.concatenate([rng.normal(c, 1.0 + c / 4, (600, 6)) for c in range(5)])
+    gmm = _fit_gmm(samples, 5, seed=0)
+    x = rng.normal(2.0, 3.0, (70_001, 6))  # two chunks of 30,000 rows and a short one
+    threaded = mixture_log_density(gmm, x, chunk=30_000)
+    np.testing.assert_allclose(threaded, gmm.score_samples(x), rtol=0, atol=1e-9)
+    monkeypatch.setattr("os.cpu_count", lambda: 1)
+    assert np.array_equal(mixture_log_density(gmm, x, chunk=30_000), threaded)
 
 
 def test_truth_without_edge_flags_a_boundary_hidden_inside_a_cloud():

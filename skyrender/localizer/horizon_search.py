@@ -29,9 +29,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft
 
+from ..blocks import in_blocks
 from ..camera import Intrinsics, pixel_directions
 from ..model import Horizons
-from .blocks import in_blocks
 from .pose_solver import camera_centres
 
 #: Horizon centres per block of :func:`horizon_costs` (blocks run on all cores, their temporaries

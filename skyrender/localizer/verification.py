@@ -26,10 +26,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..blocks import in_blocks
 from ..camera import Intrinsics
 from ..render import Terrain
 from ..render.skyline import strided_skylines
-from .blocks import in_blocks
 
 #: Horizontal shifts (px) tried when aligning a rendered skyline to the photo's.
 SHIFTS_PX = np.arange(-30.0, 30.01, 1.0)

@@ -1,6 +1,6 @@
 """Row blocks of a large array worked through on all cores.
 
-The localizer's hot paths (the far-horizon costs, the skyline alignment) are row-wise numpy
+The hot paths (the far-horizon costs, the skyline alignment, the colour mixtures' densities) are row-wise numpy
 passes over arrays of millions of elements: one pass at a time streams them through memory on
 one core. Cut into blocks of rows, each block's temporaries stay in the cache and the blocks
 run on threads (numpy releases the GIL inside its loops), with the whole array's values.
