@@ -93,13 +93,30 @@ def test_unwritable_output_is_bad_input(capsys, valley_view, tmp_path):
 
 
 def test_installed_console_script_exits_2_on_a_missing_dem(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "skyrender.cli", "render", "--dem", str(tmp_path / "none.tif"),
+    proc = subprocess.run([sys.executable, "-m", "skyrender", "render", "--dem", str(tmp_path / "none.tif"),
                            "--x", "0", "--y", "0", "--height", "2", "--pan", "0", "--tilt", "0", "--swing", "0",
                            "--fov", "60", "--size", "64x48", "--out", str(tmp_path / "a.png")],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2
     assert proc.stdout == ""
     assert proc.stderr.strip().count("\n") == 0 and "not found" in proc.stderr
+
+
+def test_the_command_sets_its_process_defaults_before_numpy_is_imported():
+    """The command's entry module turns numpy's huge-page requests off by default (a stall in
+    memory compaction on kernels that defragment on madvise), keeps a value the user set, and
+    imports nothing that would import numpy first (numpy reads the setting once, on import)."""
+    from skyrender.__main__ import command_process_settings
+
+    env = {}
+    command_process_settings(env)
+    assert env == {"NUMPY_MADVISE_HUGEPAGE": "0"}
+    env = {"NUMPY_MADVISE_HUGEPAGE": "1"}
+    command_process_settings(env)
+    assert env == {"NUMPY_MADVISE_HUGEPAGE": "1"}
+    proc = subprocess.run([sys.executable, "-c", "import sys, skyrender.__main__; print('numpy' in sys.modules)"],
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0 and proc.stdout.strip() == "False", proc.stderr
 
 
 BUILTIN_RENDER = ["render", "--dem", "builtin:jacksboro", "--lat", "36.54386", "--lon", "-84.29994", "--height", "2",

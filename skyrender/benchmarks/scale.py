@@ -101,7 +101,7 @@ def stats_line(stderr: str) -> dict:
 
 def skyrender_command(*args: str) -> list[str]:
     """The ``skyrender`` command line, run by this interpreter."""
-    return [sys.executable, "-c", "from skyrender.cli import run; run()", *args]
+    return [sys.executable, "-m", "skyrender", *args]
 
 
 def build(dem: str, out: str) -> dict:
