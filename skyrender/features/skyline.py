@@ -16,7 +16,7 @@
    boundary's roughness, fitted on the dev photos (``weights/sky_net_fit.json``).
 
 Photos wider than :attr:`SkylineParams.work_width` (a 12-megapixel phone photo) are
-processed on a reduced copy; the boundary is then refined at full resolution in a
+processed on a copy reduced to :attr:`SkylineParams.reduced_width`; the boundary is then refined at full resolution in a
 band around it, and returned in full-image coordinates.
 
 Output per README, Conventions: v per column (u = i + 0.5); NaN where a column sees
@@ -64,9 +64,12 @@ class SkylineParams:
     net_width: int = NET_WIDTH
     # another sky network's ONNX file (its fit in <name>_fit.json beside it); None: the shipped one
     net_weights: str | None = None
-    # wider photos are processed on a copy reduced to this width; the boundary search's weights
-    # are in pixels, so both extractors are scale-sensitive (gmm's were set on 1388-wide photos)
+    # wider photos are processed on a reduced copy; the boundary search's weights are in pixels,
+    # so both extractors are scale-sensitive (gmm's were set on 1388-wide photos)
     work_width: int = 1600
+    # ... this wide (at most work_width): on the 31 dev photos up-scaled 4x (11-13 MP), the hybrid met the target on 19 at
+    # 1024 and at 1600, mean within 5 px 92.8 against 92.3 %, in 0.95 against 1.85 s (experiments/photos/README.md)
+    reduced_width: int = 1024
     components: int = 5  # Gaussian components per class in the colour-texture mixtures
     rounds: int = 3  # boundary estimate -> re-fit colour models -> boundary
     band: int = 6  # pixels either side of the boundary left out of re-fitting
@@ -401,14 +404,15 @@ def column_confidence(p: np.ndarray, rows: np.ndarray, contrast: np.ndarray, sky
 
 
 def _extract_reduced(image: np.ndarray, params: SkylineParams) -> ExtractedSkyline:
-    """Extract on a copy reduced to ``params.work_width``, then refine each column at full
+    """Extract on a copy reduced to ``params.reduced_width`` (at most ``work_width``), then refine each column at full
     resolution: the strongest colour edge within (scale + 2) px of the scaled-up boundary,
     then the sub-pixel step. Coordinates are those of the full image."""
     import cv2
 
     H, W = image.shape[:2]
-    scale = W / params.work_width
-    small = cv2.resize(image, (params.work_width, int(round(H / scale))), interpolation=cv2.INTER_AREA)
+    width = min(params.reduced_width, params.work_width)
+    scale = W / width
+    small = cv2.resize(image, (width, int(round(H / scale))), interpolation=cv2.INTER_AREA)
     coarse = extract_skyline(small, params)
     sx = W / small.shape[1]
     sy = H / small.shape[0]
