@@ -7,7 +7,6 @@ Process settings that must precede numpy's import are made here, before :mod:`sk
 from __future__ import annotations
 
 import os
-import sys
 
 
 def command_process_settings(environ=os.environ) -> None:
@@ -16,20 +15,18 @@ def command_process_settings(environ=os.environ) -> None:
     ``NUMPY_MADVISE_HUGEPAGE=0``: numpy asks the kernel for transparent huge pages on every
     array of 4 MB or more. Where the kernel's THP defrag setting is ``madvise`` (Debian's and
     many cloud images' default) each such allocation may stall in direct memory compaction,
-    and a fresh process allocates nearly all its memory anew. Measured on the 2-core development
-    machine, each command alternated with and without: ``skyrender skyline`` on a 12.6-megapixel
-    photo 6.5-8.8 s against 4.1-5.0 s; ``skyrender localize`` on a 1024 x 640 render 6.7-7.5 s
-    against 5.0-5.2 s (the command's own seconds); the same results.
+    and a fresh process allocates nearly all its memory anew (the measurements: README,
+    *Command line*; ``experiments/scale/huge-pages-off/``).
     """
     environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
 
 
 def main() -> None:
-    """Console-script entry: the process settings, then the command."""
+    """Console-script entry: the process settings, then the command (:func:`skyrender.cli.run`)."""
     command_process_settings()
-    from .cli import main as cli_main
+    from .cli import run
 
-    sys.exit(cli_main())
+    run()
 
 
 if __name__ == "__main__":

@@ -495,7 +495,7 @@ def _fail(message: str) -> None:
 
 
 def run() -> None:
-    """Console-script wrapper: exit with :func:`main`'s status."""
+    """The command: exit with :func:`main`'s status (entered through :mod:`skyrender.__main__`)."""
     sys.exit(main())
 
 
