@@ -1,5 +1,7 @@
 """Stage 2a — skyline extraction from a photograph (``skyrender skyline``).
 
+0. Thin dark cables across the sky (power lines, lift cables) are painted over
+   (:mod:`.cables`): both extractors took the first one for the skyline.
 1. Per-pixel sky probability: by default (``method="gmm"``) from colour-texture
    mixtures fitted to this photo's sky and terrain, re-fitted from each boundary
    estimate (:mod:`.sky`); with ``method="net"`` from a small fully convolutional
@@ -32,6 +34,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from .cables import CableParams, remove_cables
 from .sky import pixel_features, sky_probability
 from .sky_net import NET_WIDTH, sky_logits
 
@@ -82,6 +85,8 @@ class SkylineParams:
     draft_scale: int = 2
     draft_samples: int = 4_000
     draft_min_width: int = 640
+    # thin dark cables across the sky are painted over first (:mod:`.cables`); None: left as they are
+    cables: CableParams | None = CableParams()
 
 
 @dataclass(frozen=True)
@@ -230,6 +235,8 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
     H, W = image.shape[:2]
     if W > params.work_width:
         return _extract_reduced(image, params)
+    if params.cables is not None:
+        image, _ = remove_cables(image, params.cables)
     features = pixel_features(image)
     edges = _edge_strength(features, params.edge_percentile)
     if params.method == "gmm":
