@@ -42,7 +42,8 @@ def test_a_near_slope_reaching_the_top_of_the_frame_is_not_taken_for_sky(view_te
 
 
 @pytest.mark.xfail(strict=True, reason="issue 18: on the built-in DEM, looking down the valley with the slope "
-                   "filling the top of 61 % of the columns, gmm puts the skyline 162 px low (median)")
+                   "filling the top of 61 % of the columns, gmm puts the skyline 27 px low (median; 162 px before "
+                   "the slope reaching the bottom of the frame stopped being taken for the sky)")
 def test_a_slope_filling_most_of_the_top_of_the_frame_is_not_taken_for_sky(view_terrain, valley_view):
     pose, K = valley_view
     pose = dataclasses.replace(pose, pan=280.0, tilt=-10.0)
@@ -50,6 +51,27 @@ def test_a_slope_filling_most_of_the_top_of_the_frame_is_not_taken_for_sky(view_
     assert np.mean(photo.sky_boundary <= 0.5) > 0.5
     e = column_errors(extract_skyline(photo.image).skyline, photo.sky_boundary)
     assert np.median(e) < 1.0
+
+
+def test_a_smooth_slope_from_the_top_to_the_bottom_of_the_frame_is_not_the_sky_seed_whatever_its_share_of_the_top():
+    """initial_seeds' top components: the one covering most of the top row is the sky, unless it also
+    reaches the bottom fifth of the frame (a slope the camera faces); with no other, it stays the sky."""
+    from skyrender.features.skyline import _top_components
+
+    H, W = 100, 120
+    features = np.zeros((H, W, 5), np.float32)
+    labels = np.zeros((H, W), np.int32)
+    labels[:, :80] = 1  # the slope: 80 of the 120 top pixels, top to bottom
+    labels[:15, 80:] = 2  # the sky: a sliver in the top right
+    features[..., :3][labels == 1] = (50, -12, 17)
+    features[..., :3][labels == 2] = (83, -1, -16)
+    sky, others = _top_components(features, labels)
+    assert sky.tolist() == [2] and others.tolist() == [1]
+    labels[15:, 80:] = 3  # now the right side is a second slope reaching the bottom: no sky-like candidate is left
+    labels[:15, 80:] = 3
+    features[..., :3][labels == 3] = (83, -1, -16)
+    sky, others = _top_components(features, labels)
+    assert sky.tolist() == [1] and others.tolist() == [3]  # the larger share of the top row, as before
 
 
 def test_foreground_occluders_are_part_of_the_extracted_skyline(view_terrain, valley_view):

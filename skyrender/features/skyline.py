@@ -194,12 +194,19 @@ def _top_components(features: np.ndarray, labels: np.ndarray, max_lab_distance: 
     A near slope reaching the top of the frame is smooth and touches the top edge too:
     only the component that covers most of the top row, and others of a similar mean
     Lab colour (within ``max_lab_distance``), are taken for sky; the others are terrain.
+    A component that also reaches the bottom fifth of the frame is the slope, not the sky,
+    whatever share of the top row it covers (a camera facing a slope that fills most of the
+    top edge), unless every one does.
     """
     top, counts = np.unique(labels[0][labels[0] > 0], return_counts=True)
     if len(top) <= 1:
         return top, top[:0]
     from scipy import ndimage
 
+    H = labels.shape[0]
+    boxes = ndimage.find_objects(labels)  # one per label 1..max (None for a label not present)
+    lowest_row = np.array([boxes[t - 1][0].stop - 1 for t in top])
+    counts = np.where(lowest_row < int(0.8 * H), counts, -1) if (lowest_row < int(0.8 * H)).any() else counts
     lab = features[..., :3]
     means = np.stack([ndimage.mean(lab[..., c], labels, top) for c in range(3)], axis=1)
     sky_like = np.linalg.norm(means - means[np.argmax(counts)], axis=1) <= max_lab_distance
