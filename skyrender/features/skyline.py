@@ -225,14 +225,18 @@ def initial_seeds(features: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     smooth = grad < max(0.6, float(np.percentile(grad, 35)))
     labels, _ = ndimage.label(smooth)
     sky_labels, slope_labels = _top_components(features, labels)
-    sky = np.isin(labels, sky_labels) & smooth
+    sky_region = np.isin(labels, sky_labels) & smooth
     slope = ndimage.binary_erosion(np.isin(labels, slope_labels) & smooth, iterations=3)
-    sky = ndimage.binary_erosion(sky, iterations=3)
+    sky = ndimage.binary_erosion(sky_region, iterations=3)
+    # a sliver of sky (a slope fills most of the frame): all of it, rather than the top rows, which the slope may fill
+    sliver = sky.sum() < 0.01 * H * W and sky_region.sum() >= 0.002 * H * W
+    if sliver:
+        sky = sky_region
     v = np.arange(H)[:, None]
     lowest_sky = np.where(sky.any(axis=0), H - 1 - np.argmax(sky[::-1], axis=0), -1)
     textured = grad > np.percentile(grad, 60)
     terrain = ((v >= int(0.8 * H)) | textured | slope) & (v > lowest_sky[None, :] + 3)
-    if sky.sum() < 0.01 * H * W:  # nothing smooth at the top: fall back to the top rows
+    if not sliver and sky.sum() < 0.01 * H * W:  # nothing smooth at the top: fall back to the top rows
         sky = np.broadcast_to(v < max(2, int(0.1 * H)), (H, W)).copy()
     return sky, terrain
 
