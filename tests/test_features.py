@@ -350,6 +350,11 @@ def test_the_cable_mask_holds_thin_dark_lines_with_one_sky_either_side_and_nothi
     clean, mask = remove_cables(with_cable)
     assert np.abs(clean.astype(int) - image.astype(int))[on_cable].max() <= 12  # the sky is back
     assert (clean[~mask] == with_cable[~mask]).all()  # nothing else touched
+    as_float, float_mask = remove_cables(with_cable.astype(np.float64))  # arrays of other dtypes paint too
+    assert as_float.dtype == np.float64 and (float_mask == mask).all()
+    assert np.abs(as_float - image)[on_cable].max() <= 12
+    found = extract_skyline(with_cable.astype(np.float32)).skyline  # and extract as before
+    assert np.median(np.abs(found - ridge)) < 2.0
 
 
 def test_no_cable_is_found_on_rendered_photos_without_any(builtin_view):

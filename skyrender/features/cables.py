@@ -68,7 +68,8 @@ def cable_mask(image: np.ndarray, params: CableParams = CableParams()) -> np.nda
 
 def remove_cables(image: np.ndarray, params: CableParams = CableParams()) -> tuple[np.ndarray, np.ndarray]:
     """(image with its cables painted over, their mask): :func:`cable_mask`, widened by a pixel
-    for the lines' anti-aliased edges, filled in from around it (``cv2.inpaint``, Telea). The
+    for the lines' anti-aliased edges, filled in from around it (``cv2.inpaint``, Telea; an image
+    of another dtype than uint8 channel by channel in float32, returned in its own dtype). The
     image itself is returned, not a copy, when it has no cable."""
     import cv2
 
@@ -76,4 +77,9 @@ def remove_cables(image: np.ndarray, params: CableParams = CableParams()) -> tup
     if not mask.any():
         return image, mask
     wide = cv2.dilate(mask.astype(np.uint8), np.ones((3, 3), np.uint8))
-    return cv2.inpaint(np.ascontiguousarray(image), wide, 3, cv2.INPAINT_TELEA), wide.astype(bool)
+    if image.dtype == np.uint8:
+        return cv2.inpaint(np.ascontiguousarray(image), wide, 3, cv2.INPAINT_TELEA), wide.astype(bool)
+    channels = np.asarray(image, np.float32)
+    painted = np.dstack([cv2.inpaint(np.ascontiguousarray(channels[..., c]), wide, 3, cv2.INPAINT_TELEA)
+                         for c in range(channels.shape[2])])
+    return painted.astype(image.dtype), wide.astype(bool)
