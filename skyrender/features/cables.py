@@ -21,16 +21,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Pieces of one cable this far apart (px, along the row) are joined (:func:`cable_mask`).
-GAP_PX = 15
-
 
 @dataclass(frozen=True)
 class CableParams:
     max_width: int = 4  # px: thicker dark lines are not cables
     min_contrast: float = 8.0  # Lab L units the line is darker than the closing of its column
     max_side_difference: float = 4.0  # Lab units between the colours just above and just below the line
-    max_side_texture: float = 2.0  # Lab L std (5 rows of the column) either side: the sky behind a cable is smooth
+    max_side_texture: float = 2.0  # Lab L std (5 x 5) either side: the sky behind a cable is smooth
     min_span: float = 0.15  # share of the frame's width one connected line must cross
 
 
@@ -48,9 +45,8 @@ def cable_mask(image: np.ndarray, params: CableParams = CableParams()) -> np.nda
     dark_line = closed - L > params.min_contrast
     if not dark_line.any():
         return dark_line
-    # smooth along the column (5 rows): a jagged ridge beside a cable's side is no texture of that side
-    mean = cv2.blur(L, (1, 5))
-    smooth = cv2.blur(L * L, (1, 5)) - mean * mean < params.max_side_texture ** 2
+    mean = cv2.blur(L, (5, 5))
+    smooth = cv2.blur(L * L, (5, 5)) - mean * mean < params.max_side_texture ** 2
     rows, cols = np.nonzero(dark_line)  # the tests below only where they can matter: a few % of the pixels
     sky_both_sides = np.zeros(len(rows), bool)
     # the sides are looked at just beyond the widest cable and further out: where two cables
@@ -60,21 +56,14 @@ def cable_mask(image: np.ndarray, params: CableParams = CableParams()) -> np.nda
         difference = lab[up, cols] - lab[down, cols]
         same = np.einsum("ij,ij->i", difference, difference) < params.max_side_difference ** 2
         sky_both_sides |= same & smooth[up, cols] & smooth[down, cols] & (rows >= r) & (rows < H - r)
-    line = np.zeros((H, W), np.uint8)
-    line[rows[sky_both_sides], cols[sky_both_sides]] = 1
-    # a cable passing close in front of a jagged ridge breaks into pieces (where a peak rises behind
-    # it, its lower side is terrain): pieces within GAP_PX of each other are taken together
-    n, groups = cv2.connectedComponents(cv2.dilate(line, np.ones((3, 2 * GAP_PX + 1), np.uint8)), connectivity=8)
-    found = line.astype(bool)
-    group_of, found_cols = groups[found], np.nonzero(found)[1]
-    left, right = np.full(n, W), np.full(n, -1)
-    np.minimum.at(left, group_of, found_cols)
-    np.maximum.at(right, group_of, found_cols)
-    cables = np.flatnonzero(right - left + 1 >= params.min_span * W)
-    cables = cables[cables > 0]  # 0 is the background
-    if len(cables) == 0:
+    candidate = np.zeros((H, W), np.uint8)
+    candidate[rows[sky_both_sides], cols[sky_both_sides]] = 1
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(candidate, connectivity=8)
+    long_enough = np.flatnonzero(stats[:, cv2.CC_STAT_WIDTH] >= params.min_span * W)
+    long_enough = long_enough[long_enough > 0]  # 0 is the background
+    if len(long_enough) == 0:
         return np.zeros((H, W), bool)
-    return np.isin(groups, cables) & found
+    return np.isin(labels, long_enough) & dark_line
 
 
 def remove_cables(image: np.ndarray, params: CableParams = CableParams()) -> tuple[np.ndarray, np.ndarray]:
