@@ -32,7 +32,7 @@ class CableParams:
 
 
 def cable_mask(image: np.ndarray, params: CableParams = CableParams()) -> np.ndarray:
-    """(H, W) bool: the pixels of long thin dark lines crossing smooth sky in an RGB uint8 image."""
+    """(H, W) bool: the pixels of long thin dark lines crossing smooth sky in an RGB image (0-255)."""
     import cv2
 
     H, W = image.shape[:2]

@@ -203,10 +203,10 @@ def _top_components(features: np.ndarray, labels: np.ndarray, max_lab_distance: 
         return top, top[:0]
     from scipy import ndimage
 
-    H = labels.shape[0]
     boxes = ndimage.find_objects(labels)  # one per label 1..max (None for a label not present)
-    lowest_row = np.array([boxes[t - 1][0].stop - 1 for t in top])
-    counts = np.where(lowest_row < int(0.8 * H), counts, -1) if (lowest_row < int(0.8 * H)).any() else counts
+    above_bottom_fifth = np.array([boxes[t - 1][0].stop <= int(0.8 * labels.shape[0]) for t in top])
+    if above_bottom_fifth.any():
+        counts = np.where(above_bottom_fifth, counts, -1)
     lab = features[..., :3]
     means = np.stack([ndimage.mean(lab[..., c], labels, top) for c in range(3)], axis=1)
     sky_like = np.linalg.norm(means - means[np.argmax(counts)], axis=1) <= max_lab_distance
