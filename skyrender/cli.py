@@ -136,8 +136,9 @@ def skyline(
     peaks: int = typer.Option(6, "--peaks", help="skyline peaks to report (with --json)"),
     json_out: bool = typer.Option(False, "--json", help="print {width, height, skyline} as one JSON object"),
     method: str = typer.Option("auto", "--method", help="hybrid (learned + per-photo colour mixtures), net (learned), "
-                               "gmm (per-photo colour mixtures) or auto: hybrid for camera photos (JPEG or "
-                               "camera EXIF), gmm for others (renders)"),
+                               "gmm (per-photo colour mixtures), select (hybrid and gmm, the one more confident "
+                               "where they part) or auto: select for camera photos (JPEG or camera EXIF), gmm for "
+                               "others (renders)"),
 ):
     """Extract the skyline (sky/terrain boundary per column) from a photograph."""
     from .features import SkylineParams, extract_skyline, load_photo, skyline_peaks
@@ -147,14 +148,14 @@ def skyline(
 
     if peaks < 0:
         raise InputError(f"--peaks must be >= 0, got {peaks}")
-    if method not in ("auto", "hybrid", "net", "gmm"):
-        raise InputError(f"--method must be auto, hybrid, net or gmm, got {method!r}")
+    if method not in ("auto", "select", "hybrid", "net", "gmm"):
+        raise InputError(f"--method must be auto, select, hybrid, net or gmm, got {method!r}")
     for path, option, kinds in ((out, "--out", SKYLINE_SUFFIXES), (overlay, "--overlay", IMAGE_SUFFIXES)):
         if path is not None:
             _check_writable(path, option, kinds)
     photo = load_photo(image)
     if method == "auto":
-        method = "hybrid" if is_camera_photo(str(image)) else "gmm"
+        method = "select" if is_camera_photo(str(image)) else "gmm"
     result = extract_skyline(photo, SkylineParams(method=method))
     if out is not None:
         save_skyline(out, result.skyline)

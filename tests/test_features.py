@@ -399,3 +399,45 @@ def test_another_sky_network_runs_with_the_fit_beside_it(tmp_path):
     shutil.copy(WEIGHTS, other)
     (tmp_path / "other_fit.json").write_text(json.dumps(fit))
     assert _net_boundary_weights(SkylineParams(method="net", net_weights=str(other)))[0] == 1.5
+
+
+def test_select_keeps_the_skyline_more_confident_where_the_two_part():
+    from skyrender.features.skyline import ExtractedSkyline, select_skylines
+
+    H, W = 40, 12
+    p = np.zeros((H, W), np.float32)
+    first = ExtractedSkyline(np.full(W, 10.0), np.full(W, 0.9), p)
+    second = ExtractedSkyline(np.full(W, 12.0), np.full(W, 0.95), p + 1)
+    # within 5 px everywhere: the first, however confident the second
+    assert select_skylines(first, second) is first
+    # apart on columns 4-7 (one of them all sky): there the second is surer, so the second, whole
+    sky = second.skyline.copy()
+    sky[4:7] = 30.0
+    sky[7] = np.nan
+    conf = second.confidence.copy()
+    conf[4:8] = [0.8, 0.9, 0.9, 0.9]
+    other = ExtractedSkyline(sky, conf, p + 1)
+    worse = ExtractedSkyline(first.skyline, np.where(np.arange(W) >= 4, 0.5, 0.99), p)
+    assert select_skylines(worse, other) is other
+    # ... and where the first is surer on the disputed columns (though less sure elsewhere), the first
+    sure = ExtractedSkyline(first.skyline, np.where(np.arange(W) >= 4, 0.99, 0.1), p)
+    assert select_skylines(sure, other) is sure
+    # a column all sky in one and not in the other is disputed: only column 7 apart, the second surer there
+    lone = ExtractedSkyline(np.where(np.arange(W) == 7, np.nan, first.skyline), np.full(W, 0.99), p + 1)
+    assert select_skylines(ExtractedSkyline(first.skyline, np.where(np.arange(W) == 7, 0.2, 1.0), p), lone) is lone
+
+
+@pytest.mark.parametrize("seed", [14, 15])
+def test_select_takes_the_mixtures_where_the_network_follows_a_cable(seed, builtin_view):
+    """With the cables left in (``cables=None``), the network-led hybrid takes the lower cable for
+    the skyline (61-70 px off on these two) at middling confidence, where the per-photo mixtures hold
+    at a confident 0.14 px: ``select`` keeps the mixtures' skyline."""
+    from skyrender.features import SkylineParams
+
+    terrain, pose, K = builtin_view
+    photo = render_photo(terrain, pose, K, Look(sky="clear", power_lines=2, seed=seed))
+    runs = {m: extract_skyline(photo.image, SkylineParams(method=m, cables=None)) for m in ("hybrid", "gmm", "select")}
+    assert np.median(column_errors(runs["hybrid"].skyline, photo.sky_boundary)) > 20
+    e = column_errors(runs["select"].skyline, photo.sky_boundary)
+    assert np.median(e) <= 0.5 and np.mean(e <= 5) >= 0.95
+    np.testing.assert_array_equal(runs["select"].skyline, runs["gmm"].skyline)

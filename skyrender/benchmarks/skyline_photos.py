@@ -1,11 +1,12 @@
 """Skyline extraction on real photographs against their truth, per side of the fixed split.
 
 ``python -m skyrender.benchmarks.skyline_photos [--data DIR] [--sides validation heldout]
-[--methods hybrid net gmm otsu] [--out experiments/photos]``
+[--methods select hybrid net gmm otsu] [--out experiments/photos]``
 
 For every photo: median absolute column error (px), the share of columns within 5 px
-and seconds, for the photo extractor (``hybrid``: the network's boundary seeds per-photo
-colour mixtures), the learned extractor alone (``net``), the per-photo colour-mixture
+and seconds, for the photo extractor (``select``: ``hybrid`` and ``gmm``, the one more
+confident where they part), ``hybrid`` (the network's boundary seeds per-photo colour
+mixtures; the photo extractor until 2026-12-04), the learned extractor alone (``net``), the per-photo colour-mixture
 extractor (``gmm``, its parameters set by hand on the ten ``heldout`` photos) and an
 Otsu-threshold baseline, all in the same run; the confidence split and the speed are
 those of the first method. Sides (``experiments/photos/split.json``):
@@ -193,7 +194,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", default=DEFAULT_PHOTOS)
     parser.add_argument("--sides", nargs="+", default=["validation", "heldout"])
-    parser.add_argument("--methods", nargs="+", default=["hybrid", "net", "gmm", "otsu"])
+    parser.add_argument("--methods", nargs="+", default=["select", "hybrid", "net", "gmm", "otsu"])
     parser.add_argument("--limit", type=int, default=0, help="at most this many photos per side (0: all)")
     parser.add_argument("--out", default=os.path.join(REPO, "experiments", "photos"))
     args = parser.parse_args(argv)

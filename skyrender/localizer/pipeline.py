@@ -87,7 +87,7 @@ PHOTO_MAX_SWING_DEG = 8.0
 
 @dataclass(frozen=True)
 class LocalizeParams:
-    skyline_method: str = "gmm"  # the skyline extractor when none is given: "gmm" (renders) or "hybrid" (photos)
+    skyline_method: str = "gmm"  # the skyline extractor when none is given: "gmm" (renders) or "select" (photos)
     skyline_net_width: int | None = None  # its network's input width (px); None: the extractor's default
     n_peaks: int = 8  # image peaks taken (the paper's top N)
     max_peak_aspect: float = 1.5  # steeper skyline peaks are trees or posts in front, not mountains
@@ -151,7 +151,9 @@ class LocalizeParams:
         true position leaves 1.4-7.4 px, ``make oracle``): the far-horizon search turns
         the skyline into directions for tilts from -10 to +30 deg, fits offset and slope
         only, and the best 8 of it by its own cost and 8 by verification score are
-        refined; the skyline comes from the learned extractor. Three-point hypotheses
+        refined; the skyline comes from ``select`` (the learned extractor, or the per-photo mixtures
+        where they part from it and are surer: on the 21 CH1 dev photos 13 within 1 km against 12
+        with the learned extractor alone, ``experiments/ch1/select/``). Three-point hypotheses
         are off (on CH1 their peaks are rarely DEM peaks; generating them took 10-30 s). The refined scores of right and
         wrong poses overlap (1.1-2.4 vs 1.1-4.0 px on CH1 training photos), but the
         margin to the best pose farther away (:data:`PHOTO_RUNNER_UP_M`) separates them, so the
@@ -159,7 +161,7 @@ class LocalizeParams:
         The camera roll stays within :data:`PHOTO_MAX_SWING_DEG` in the verification's alignment
         and the refinement: wrong places fitted with 10-50 deg of it (held in the far-horizon
         fit too, ``HorizonSearchParams.max_swing_deg``, it lost a confident answer on the CH1 dev photos)."""
-        return cls(skyline_method="hybrid", max_hypotheses=0, final_refinements=8, max_refinements=4,
+        return cls(skyline_method="select", max_hypotheses=0, final_refinements=8, max_refinements=4,
                    max_horizon_refinements=16,
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=PHOTO_RUNNER_UP_M, confidence_model="margin",
                    margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,
