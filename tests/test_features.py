@@ -164,6 +164,36 @@ def test_mixture_density_is_scikit_learns_and_the_same_to_the_bit_on_one_core_or
     assert np.array_equal(mixture_log_density(gmm, x, chunk=30_000), threaded)
 
 
+def test_sky_probability_fits_its_two_mixtures_the_same_on_one_core_or_all(monkeypatch):
+    """The sky and terrain mixtures of a round are fitted on a thread each (``blocks.concurrently``):
+    the probability is the one of fitting them one after the other, to the bit; and the clear-sky
+    field evaluated row by row is the design matrix's, to the float32."""
+    from skyrender.features.sky import _quadratic_design, _quadratic_field, pixel_features, sky_probability
+
+    features = pixel_features(drawn_sky_photo())
+    H, W = features.shape[:2]
+    v = np.arange(H)[:, None]
+    sky, terrain = np.broadcast_to(v < 30, (H, W)), np.broadcast_to(v >= 50, (H, W))
+    prior = np.full(H, 0.5)
+    threaded = sky_probability(features, sky, terrain, prior, seed=3)
+    monkeypatch.setattr("os.cpu_count", lambda: 1)
+    assert np.array_equal(sky_probability(features, sky, terrain, prior, seed=3), threaded)
+    coef = np.random.default_rng(0).normal(0.0, 30.0, (6, 3))
+    design = _quadratic_design((np.arange(W) + 0.5) / W - 0.5, (np.arange(H)[:, None] + 0.5) / H - 0.5)
+    np.testing.assert_allclose(_quadratic_field(coef, H, W), (design @ coef).astype(np.float32), rtol=1e-6, atol=1e-4)
+
+
+def drawn_sky_photo() -> np.ndarray:
+    """A 96 x 128 drawn photo: a blue gradient sky over noisy brown terrain below a wavy line."""
+    rng = np.random.default_rng(5)
+    H, W = 96, 128
+    v, u = np.mgrid[0:H, 0:W]
+    ridge = 40 + 8 * np.sin(u / 11.0)
+    sky = np.stack([90 + v, 140 + v // 2, 230 - v // 4], axis=-1)
+    ground = np.stack([110, 85, 60], axis=-1) + rng.normal(0, 12, (H, W, 3))
+    return np.clip(np.where((v < ridge)[..., None], sky, ground), 0, 255).astype(np.uint8)
+
+
 def test_truth_without_edge_flags_a_boundary_hidden_inside_a_cloud():
     H, W = 80, 60
     image = np.zeros((H, W, 3), np.uint8)
