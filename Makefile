@@ -60,7 +60,7 @@ fit-photo-confidence: install
 # reproduces skyrender/features/weights/ for the seed
 train-sky-net: install
 	$(BIN)/python -m pip install -q -e '.[dev,train]'
-	$(BIN)/python -m skyrender.training.sky_net --steps 4000 --seed 0 --renders 0 --threads 1
+	$(BIN)/python -m skyrender.training.sky_net --steps 12000 --seed 1 --renders 0 --threads 1
 	$(BIN)/python -m skyrender.training.skyline_fit
 
 # the paper's experiment: 2 scenes x 2 seeds x 25 rendered views, three configurations (~40 min);

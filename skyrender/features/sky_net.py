@@ -21,7 +21,7 @@ import numpy as np
 # the hybrid extractor did better with the network narrower (mean within 5 px 92.8 / 93.9 /
 # 95.1 % at 512 / 384 / 256 px), but 256 px did worse on the validation side (82.3 against
 # 85.9 %, experiments/photos/probe-net-width-256.txt): a choice among six widths on 31 photos
-# fitted their noise, so the network stays at 512 (its 256-px fit is kept: sky_net_fit-256.json)
+# fitted their noise, so the network stays at 512 (a 256-px fit: skyline_fit --net-width 256)
 NET_WIDTH = 512
 STRIDE = 16  # the network's total down-sampling: input sides are multiples of it
 WEIGHTS = os.path.join(os.path.dirname(__file__), "weights", "sky_net.onnx")
