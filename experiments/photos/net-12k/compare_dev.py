@@ -14,7 +14,7 @@ import sys
 
 import numpy as np
 
-from skyrender.benchmarks.skyline_photos import column_errors
+from skyrender.benchmarks.skyline_photos import column_errors, meets_target
 from skyrender.datasets.real_photos import items_on_side
 from skyrender.features import SkylineParams, extract_skyline, load_photo
 from skyrender.features.skyline import ExtractedSkyline, select_skylines
@@ -23,7 +23,7 @@ NAMES = ("net", "hybrid", "select", "old_net", "old_hybrid", "old_select")
 
 
 def met(e: np.ndarray) -> bool:
-    return bool(np.median(e) <= 2 and np.mean(e <= 5) >= 0.95)
+    return bool(meets_target(np.median(e), np.mean(e <= 5)))
 
 
 def main(weights: str, side: str, out: str, cache: str) -> None:
