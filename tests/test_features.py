@@ -151,6 +151,27 @@ def test_clear_sky_field_fits_a_smooth_sky_and_ignores_clouds():
     assert hazy_ridge_logit(features, field, sigma).max() == 0.0  # the cloud is greyer but brighter
 
 
+def _scikit_learn_mixture(samples: np.ndarray, seed: int):
+    from sklearn.mixture import GaussianMixture
+
+    return GaussianMixture(5, covariance_type="full", reg_covar=0.5, max_iter=50, random_state=seed).fit(samples)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_colour_mixture_fit_is_scikit_learns(seed):
+    """The colour mixtures' EM (all components per matrix product) fits what scikit-learn's
+    GaussianMixture fits from the same k-means start: the same steps, the same parameters."""
+    rng = np.random.default_rng(7 + seed)
+    # a sky-like photo's samples: Lab, texture, gradient and row, clusters of unequal spread
+    samples = np.concatenate([rng.normal([60 - 8 * c, 3 * c, -20 + 5 * c, c, 2 * c, 4 * c], 1.0 + c, (900, 6))
+                              for c in range(5)])
+    ours, theirs = _fit_gmm(samples, 5, seed), _scikit_learn_mixture(samples, seed)
+    assert ours.iterations == theirs.n_iter_ > 2 and ours.converged == theirs.converged_
+    np.testing.assert_allclose(ours.weights, theirs.weights_, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(ours.means, theirs.means_, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(ours.precisions_cholesky, theirs.precisions_cholesky_, rtol=0, atol=1e-8)
+
+
 def test_mixture_density_is_scikit_learns_and_the_same_to_the_bit_on_one_core_or_all(monkeypatch):
     """The colour mixtures' log density (two matrix products per chunk of pixels, the chunks on
     all cores) is what scikit-learn's ``score_samples`` gives, and the threads change no bit."""
@@ -159,7 +180,7 @@ def test_mixture_density_is_scikit_learns_and_the_same_to_the_bit_on_one_core_or
     gmm = _fit_gmm(samples, 5, seed=0)
     x = rng.normal(2.0, 3.0, (70_001, 6))  # two chunks of 30,000 rows and a short one
     threaded = mixture_log_density(gmm, x, chunk=30_000)
-    np.testing.assert_allclose(threaded, gmm.score_samples(x), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(threaded, _scikit_learn_mixture(samples, 0).score_samples(x), rtol=0, atol=1e-9)
     monkeypatch.setattr("os.cpu_count", lambda: 1)
     assert np.array_equal(mixture_log_density(gmm, x, chunk=30_000), threaded)
 

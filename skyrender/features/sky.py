@@ -4,7 +4,8 @@ Pixel features: CIE Lab colour, local texture (standard deviation of
 lightness in a 7 x 7 window, and gradient magnitude) and image row (sky
 colour changes with elevation angle). The
 probability combines a prior on the row with colour-texture models learned
-*from the photo itself*: Gaussian mixtures (scikit-learn) fitted to pixels
+*from the photo itself*: Gaussian mixtures (scikit-learn's fit, each EM step
+vectorised over the components: :func:`_fit_gmm`) fitted to pixels
 labelled sky and terrain by the previous boundary estimate (the first round
 seeds them from the top and bottom of the frame). Self-training adapts to
 what a fixed classifier cannot know: this photo's sky, haze and snow.
@@ -18,6 +19,8 @@ ridge through haze; clouds are greyer too, but brighter).
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -39,53 +42,135 @@ def pixel_features(image: np.ndarray) -> np.ndarray:
     return np.dstack([lab, texture, gradient]).astype(np.float32)
 
 
-def _fit_gmm(samples: np.ndarray, components: int, seed: int):
-    """Full-covariance Gaussian mixture (scikit-learn), deterministic for a seed."""
-    import warnings
+@dataclass(frozen=True)
+class Mixture:
+    """A full-covariance Gaussian mixture of K components in D dimensions: ``weights`` (K,),
+    ``means`` (K, D) and ``precisions_cholesky`` (K, D, D), upper-triangular P_k with
+    precision_k = P_k P_k^T (scikit-learn's ``precisions_cholesky_``); the EM steps it took
+    and whether it converged."""
 
-    from sklearn.exceptions import ConvergenceWarning
-    from sklearn.mixture import GaussianMixture
+    weights: np.ndarray
+    means: np.ndarray
+    precisions_cholesky: np.ndarray
+    iterations: int = 0
+    converged: bool = True
+
+
+#: The colour mixtures' EM: covariance regularisation (added to the diagonal), step limit and
+#: tolerance on the mean log-likelihood's change (scikit-learn's reg_covar, max_iter and tol).
+GMM_REG_COVAR = 0.5
+GMM_MAX_ITER = 50  # plenty for a probability map
+GMM_TOL = 1e-3
+
+
+def _fit_gmm(samples: np.ndarray, components: int, seed: int) -> Mixture:
+    """Full-covariance Gaussian mixture of ``samples`` (N, D), deterministic for a seed: what
+    scikit-learn's ``GaussianMixture(covariance_type="full", reg_covar=GMM_REG_COVAR,
+    max_iter=GMM_MAX_ITER, random_state=seed)`` fits (its k-means start, then the same EM
+    steps and stop, to ~1e-10), with each EM step over all components in a few matrix
+    products instead of several passes per component.
+    """
+    from sklearn.cluster import KMeans
     from threadpoolctl import threadpool_limits
 
-    n = int(min(components, max(1, len(samples) // 50)))
+    x = np.asarray(samples, np.float64)
+    n = int(min(components, max(1, len(x) // 50)))
     # one thread: the fit's matrices are a few thousand by 6, and BLAS / OpenMP threads on them
     # cost more than they share (a fit 3x faster on 2 cores; the same fit to the bit)
-    with warnings.catch_warnings(), threadpool_limits(1):  # 50 EM steps are plenty for a probability map
-        warnings.simplefilter("ignore", ConvergenceWarning)
-        return GaussianMixture(n, covariance_type="full", reg_covar=0.5, max_iter=50,
-                               random_state=seed).fit(samples.astype(np.float64))
+    with threadpool_limits(1):
+        labels = KMeans(n_clusters=n, n_init=1, random_state=seed).fit(x).labels_
+        centre = x.mean(axis=0)
+        x = x - centre  # fitted centred (covariances from outer products), the means moved back at the end
+        outer = (x[:, :, None] * x[:, None, :]).reshape(len(x), -1)
+        resp = np.zeros((n, len(x)))
+        resp[labels, np.arange(len(x))] = 1.0
+        nk, means, chol = _mixture_m_step(x, outer, resp, GMM_REG_COVAR)
+        mixture = Mixture(nk / len(x), means, chol)
+        lower = -np.inf
+        for step in range(1, GMM_MAX_ITER + 1):
+            log_prob = _weighted_log_prob(x, mixture)
+            norm = _logsumexp_columns(log_prob)
+            log_prob -= norm  # log responsibilities
+            nk, means, chol = _mixture_m_step(x, outer, np.exp(log_prob, out=log_prob), GMM_REG_COVAR)
+            mixture = Mixture(nk / nk.sum(), means, chol, step, False)
+            change, lower = float(np.mean(norm)) - lower, float(np.mean(norm))
+            if abs(change) < GMM_TOL:
+                mixture = replace(mixture, converged=True)
+                break
+    return replace(mixture, means=mixture.means + centre)
 
 
-def mixture_log_density(gmm, x: np.ndarray, chunk: int = 65_536) -> np.ndarray:
-    """(N,) log density of a fitted full-covariance ``GaussianMixture`` at the rows of ``x``
-    (N, D): what its ``score_samples`` gives (to 1e-14), with every component in two matrix
-    products per chunk of rows instead of a pass per component (3.5x faster on a photo).
-    The chunks run on all cores (:func:`~skyrender.blocks.in_blocks`), each row's value
+def _mixture_m_step(x: np.ndarray, outer: np.ndarray, resp: np.ndarray,
+                    reg_covar: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One M step: the components' soft counts (K,), means (K, D) and precision Cholesky
+    factors (K, D, D) from samples ``x`` (N, D), their outer products ``outer`` (N, D*D) and
+    responsibilities ``resp`` (K, N). Every component's weighted scatter is one matrix product
+    (``resp @ outer``) less its mean's outer product: with ``x`` centred on its mean that
+    difference loses ~1e-12 of the covariance."""
+    from scipy.linalg import solve_triangular
+
+    K, D = resp.shape[0], x.shape[1]
+    nk = resp.sum(axis=1) + 10 * np.finfo(resp.dtype).eps
+    means = (resp @ x) / nk[:, None]
+    covariances = (resp @ outer).reshape(K, D, D) / nk[:, None, None] - means[:, :, None] * means[:, None, :]
+    covariances[:, np.arange(D), np.arange(D)] += reg_covar
+    try:
+        lower = np.linalg.cholesky(covariances)
+    except np.linalg.LinAlgError as e:  # not with reg_covar: a collapsed component still has it
+        raise ValueError("a colour mixture's covariance is not positive definite") from e
+    eye = np.eye(D)
+    return nk, means, np.stack([solve_triangular(c, eye, lower=True).T for c in lower])
+
+
+def _log_density_terms(m: Mixture) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(stacked (K*D, D), shift (K*D, 1), block_sum (K, K*D), const (K, 1)) such that the K
+    components' weighted log densities at columns x (D, N) are
+    -0.5 block_sum @ (stacked @ x - shift)^2 + const."""
+    K, D = m.means.shape
+    chol = m.precisions_cholesky
+    stacked = chol.transpose(0, 2, 1).reshape(K * D, D)  # stacked @ x = [chol_k^T x for each k]
+    shift = np.einsum("kd,kde->ke", m.means, chol).reshape(K * D, 1)
+    block_sum = np.kron(np.eye(K), np.ones((1, D)))  # (K, K * D): sums each component's D squares
+    # per component: log |prec_chol_k| + log w_k - D/2 log(2 pi)
+    const = np.log(np.diagonal(chol, axis1=1, axis2=2)).sum(axis=1) + np.log(m.weights) - 0.5 * D * np.log(2 * np.pi)
+    return stacked, shift, block_sum, const[:, None]
+
+
+def _weighted_log_prob(x: np.ndarray, m: Mixture, terms: tuple | None = None) -> np.ndarray:
+    """(K, N) log (w_k N(x | component k)) at the rows of ``x`` (N, D), every component in
+    two matrix products (``terms``: :func:`_log_density_terms` of ``m``, when already made).
+    Components run along the first axis, so the sums over them are whole-row passes."""
+    stacked, shift, block_sum, const = _log_density_terms(m) if terms is None else terms
+    y = stacked @ x.T
+    y -= shift
+    np.square(y, out=y)
+    log_prob = block_sum @ y
+    log_prob *= -0.5
+    log_prob += const
+    return log_prob
+
+
+def _logsumexp_columns(a: np.ndarray) -> np.ndarray:
+    """(N,) log sum exp over the columns of ``a`` (K, N), shifted by each column's maximum."""
+    top = a.max(axis=0)
+    return top + np.log(np.exp(a - top).sum(axis=0))
+
+
+def mixture_log_density(m: Mixture, x: np.ndarray, chunk: int = 65_536) -> np.ndarray:
+    """(N,) log density of a fitted mixture (:func:`_fit_gmm`) at the rows of ``x`` (N, D): what
+    scikit-learn's ``score_samples`` gives for the same mixture (to 1e-12), with every component
+    in two matrix products per chunk of rows instead of a pass per component (3.5x faster on a
+    photo). The chunks run on all cores (:func:`~skyrender.blocks.in_blocks`), each row's value
     computed as in one chunk at a time, to the bit."""
     from threadpoolctl import threadpool_limits
 
     from ..blocks import in_blocks
 
-    means, chol, weights = gmm.means_, gmm.precisions_cholesky_, gmm.weights_
-    K, D = means.shape
-    stacked = chol.transpose(1, 0, 2).reshape(D, K * D)  # x @ stacked = [x @ chol_k for each k]
-    shift = np.einsum("kd,kde->ke", means, chol).reshape(K * D)
-    block_sum = np.kron(np.eye(K), np.ones((D, 1)))  # (K * D, K): sums each component's D squares
-    # per component: log |prec_chol_k| + log w_k - D/2 log(2 pi)
-    const = np.log(np.diagonal(chol, axis1=1, axis2=2)).sum(axis=1) + np.log(weights) - 0.5 * D * np.log(2 * np.pi)
+    terms = _log_density_terms(m)
     out = np.empty(len(x))
 
     def rows(start: int, stop: int) -> None:
-        y = x[start:stop] @ stacked
-        y -= shift
-        np.square(y, out=y)
-        log_prob = y @ block_sum
-        log_prob *= -0.5
-        log_prob += const
-        top = log_prob.max(axis=1)
-        log_prob -= top[:, None]
-        np.exp(log_prob, out=log_prob)
-        out[start:stop] = top + np.log(log_prob.sum(axis=1))
+        out[start:stop] = _logsumexp_columns(_weighted_log_prob(x[start:stop], m, terms))
 
     with threadpool_limits(1, user_api="blas"):  # the chunks are the threads; BLAS threads inside them would fight
         in_blocks(len(x), chunk, rows)
@@ -199,10 +284,10 @@ def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np
 
     H, W, C = features.shape
     rng = np.random.default_rng(seed)
-    x = features.reshape(-1, C).astype(np.float64)
+    x = np.empty((H * W, C + 1 if row_weight else C))
+    x[:, :C] = features.reshape(-1, C)
     if row_weight:  # sky colour changes with elevation angle: let the mixtures see the row
-        rows = np.repeat((np.arange(H) + 0.5) / H * row_weight, W)
-        x = np.column_stack([x, rows])
+        x[:, C] = np.repeat((np.arange(H) + 0.5) / H * row_weight, W)
 
     def pick(mask):
         idx = np.flatnonzero(mask.ravel())
