@@ -264,7 +264,16 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
     features = pixel_features(image)
     edges = _edge_strength(features, params.edge_percentile)
     if params.method == "select":
-        hybrid, gmm = (_extract(image, features, edges, method, params) for method in ("hybrid", "gmm"))
+        from threadpoolctl import threadpool_limits
+
+        from ..blocks import concurrently
+
+        # the two extractors on a thread each (1.43 -> 1.19 s a CH1 photo on 2 cores, the same skylines to the bit);
+        # BLAS and OpenMP held to one thread around both, so that neither's own limits, set and restored inside,
+        # can widen them under the other
+        with threadpool_limits(1):
+            hybrid, gmm = concurrently(lambda: _extract(image, features, edges, "hybrid", params),
+                                       lambda: _extract(image, features, edges, "gmm", params))
         return select_skylines(hybrid, gmm, params.select_tol_px)
     if params.method not in ("gmm", "net", "hybrid"):
         raise ValueError(f"unknown skyline method {params.method!r} (select, hybrid, net or gmm)")
