@@ -117,11 +117,13 @@ class DEM:
         col, row = self.fractional_index(x, y)
         col, row = np.broadcast_arrays(col, row)
         rows, cols = self.shape
-        inside = self.contains(x, y) & np.isfinite(col) & np.isfinite(row)
-        c = np.clip(np.floor(np.where(inside, col, 0)).astype(np.int64), 0, cols - 2)
-        r = np.clip(np.floor(np.where(inside, row, 0)).astype(np.int64), 0, rows - 2)
-        s = np.where(inside, col, 0) - c  # east fraction from the SW corner
-        t = 1.0 - (np.where(inside, row, 0) - r)  # north fraction from the SW corner
+        # what contains() tests, on the indices already at hand (NaN compares False: outside)
+        inside = (col >= 0) & (col <= cols - 1) & (row >= 0) & (row <= rows - 1)
+        col, row = np.where(inside, col, 0), np.where(inside, row, 0)
+        c = np.clip(np.floor(col).astype(np.int64), 0, cols - 2)
+        r = np.clip(np.floor(row).astype(np.int64), 0, rows - 2)
+        s = col - c  # east fraction from the SW corner
+        t = 1.0 - (row - r)  # north fraction from the SW corner
         z = self.elevation
         z_nw, z_ne = z[r, c], z[r, c + 1]
         z_sw, z_se = z[r + 1, c], z[r + 1, c + 1]
