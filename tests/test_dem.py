@@ -120,7 +120,7 @@ def test_builtin_jacksboro_is_north_up_in_utm_16n():
     # the highest cell is Cross Mountain (1,077 m, 36.4806 N 84.2369 W), near the south edge:
     # a north-south flip would put it 0.21 deg north, an east-west flip 0.03 deg west
     row, col = np.unravel_index(np.nanargmax(dem.elevation), dem.shape)
-    x, y = dem.transform * (col + 0.5, row + 0.5)
+    x, y = dem.transform @ (col + 0.5, row + 0.5)
     lon, lat = dem.to_lonlat(x, y)
     assert lon == pytest.approx(-84.2369, abs=0.01) and lat == pytest.approx(36.4806, abs=0.01)
 

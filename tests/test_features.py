@@ -172,6 +172,21 @@ def test_colour_mixture_fit_is_scikit_learns(seed):
     np.testing.assert_allclose(ours.precisions_cholesky, theirs.precisions_cholesky_, rtol=0, atol=1e-8)
 
 
+def test_colour_mixture_of_one_flat_colour_fits_quietly():
+    """A flat render's sky gives fewer distinct colours than components: the fit still converges to
+    finite parameters and says nothing (a warning would be a second stderr line of the CLI)."""
+    import warnings
+
+    samples = np.ones((3000, 6))
+    samples[:10] += 1.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        m = _fit_gmm(samples, 5, seed=0)
+        density = mixture_log_density(m, samples[:20])
+    assert m.converged and np.isfinite(m.precisions_cholesky).all()
+    assert np.all(np.isfinite(density)) and density[0] < density[-1]  # the rare colour is the less likely
+
+
 def test_mixture_density_is_scikit_learns_and_the_same_to_the_bit_on_one_core_or_all(monkeypatch):
     """The colour mixtures' log density (two matrix products per chunk of pixels, the chunks on
     all cores) is what scikit-learn's ``score_samples`` gives, and the threads change no bit."""

@@ -70,14 +70,18 @@ def _fit_gmm(samples: np.ndarray, components: int, seed: int) -> Mixture:
     steps and stop, to ~1e-10), with each EM step over all components in a few matrix
     products instead of several passes per component.
     """
+    import warnings
+
     from sklearn.cluster import KMeans
+    from sklearn.exceptions import ConvergenceWarning
     from threadpoolctl import threadpool_limits
 
     x = np.asarray(samples, np.float64)
     n = int(min(components, max(1, len(x) // 50)))
     # one thread: the fit's matrices are a few thousand by 6, and BLAS / OpenMP threads on them
     # cost more than they share (a fit 3x faster on 2 cores; the same fit to the bit)
-    with threadpool_limits(1):
+    with threadpool_limits(1), warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)  # fewer distinct colours than clusters (a flat render's sky)
         labels = KMeans(n_clusters=n, n_init=1, random_state=seed).fit(x).labels_
         centre = x.mean(axis=0)
         x = x - centre  # fitted centred (covariances from outer products), the means moved back at the end
