@@ -56,8 +56,9 @@ def fitted_path(net_width: int = NET_WIDTH, net_weights: str | None = None) -> s
 class SkylineParams:
     # "gmm": per-photo colour mixtures (default: it also holds on renders); "net": the learned
     # sky probability (24x faster, not trained on renders); "hybrid": the network's boundary
-    # seeds per-photo mixtures (1 s); "select": hybrid and gmm both, and where they part, the one
-    # more confident on the disputed columns (:func:`select_skylines`; best on unseen real photos, 2 s)
+    # seeds per-photo mixtures (0.5 s); "select": hybrid and gmm both, and where they part, the one
+    # more confident on the disputed columns (:func:`select_skylines`; best on unseen real photos, 1.1 s,
+    # the two on a thread each)
     method: str = "gmm"
     jump_cost: float = 0.25  # per pixel of boundary jump between columns
     jump_cap: float = 12.0  # no jump costs more than this (vertical edges)
