@@ -497,7 +497,8 @@ def test_select_keeps_the_skyline_more_confident_where_the_two_part():
 def test_select_takes_the_mixtures_where_the_network_follows_a_cable(seed, builtin_view):
     """With the cables left in (``cables=None``), the network-led hybrid takes the lower cable for
     the skyline (61-70 px off on these two) at middling confidence, where the per-photo mixtures hold
-    at a confident 0.14 px: ``select`` keeps the mixtures' skyline."""
+    at a confident 0.14 px: ``select`` keeps the mixtures' skyline — the very arrays of ``gmm`` run alone,
+    though ``select`` runs its two extractors on a thread each."""
     from skyrender.features import SkylineParams
 
     terrain, pose, K = builtin_view
@@ -507,3 +508,4 @@ def test_select_takes_the_mixtures_where_the_network_follows_a_cable(seed, built
     e = column_errors(runs["select"].skyline, photo.sky_boundary)
     assert np.median(e) <= 0.5 and np.mean(e <= 5) >= 0.95
     np.testing.assert_array_equal(runs["select"].skyline, runs["gmm"].skyline)
+    np.testing.assert_array_equal(runs["select"].confidence, runs["gmm"].confidence)
