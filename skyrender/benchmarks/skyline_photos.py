@@ -200,12 +200,12 @@ def mixture_fit_speed(items, repeats: int = 3) -> dict:
     from threadpoolctl import threadpool_limits
 
     from ..features import load_photo
-    from ..features.sky import GMM_MAX_ITER, GMM_REG_COVAR, _fit_gmm, pixel_features
+    from ..features.sky import GMM_MAX_ITER, GMM_REG_COVAR, _fit_gmm, mixture_inputs, pixel_features
 
     it = next(i for i in items if i.key.startswith("ch1/"))
     features = pixel_features(load_photo(it.image_path))
-    H, W, C = features.shape
-    x = np.column_stack([features.reshape(-1, C), np.repeat((np.arange(H) + 0.5) / H * 20.0, W)]).astype(np.float64)
+    H, W = features.shape[:2]
+    x = mixture_inputs(features)
     rng = np.random.default_rng(0)
     top, bottom = x[: H // 3 * W], x[H // 2 * W:]
     sets = [top[rng.choice(len(top), 12_000, replace=False)], bottom[rng.choice(len(bottom), 12_000, replace=False)]]

@@ -104,7 +104,10 @@ class DEM:
 
     def contains(self, x, y) -> np.ndarray:
         """True where (x, y) lies on the defined surface (between outer cell centres)."""
-        col, row = self.fractional_index(x, y)
+        return self._on_surface(*self.fractional_index(x, y))
+
+    def _on_surface(self, col, row) -> np.ndarray:
+        """:meth:`contains` on fractional indices (NaN compares False: off the surface)."""
         rows, cols = self.shape
         return (col >= 0) & (col <= cols - 1) & (row >= 0) & (row <= rows - 1)
 
@@ -117,8 +120,7 @@ class DEM:
         col, row = self.fractional_index(x, y)
         col, row = np.broadcast_arrays(col, row)
         rows, cols = self.shape
-        # what contains() tests, on the indices already at hand (NaN compares False: outside)
-        inside = (col >= 0) & (col <= cols - 1) & (row >= 0) & (row <= rows - 1)
+        inside = self._on_surface(col, row)
         col, row = np.where(inside, col, 0), np.where(inside, row, 0)
         c = np.clip(np.floor(col).astype(np.int64), 0, cols - 2)
         r = np.clip(np.floor(row).astype(np.int64), 0, rows - 2)

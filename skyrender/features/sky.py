@@ -52,8 +52,8 @@ class Mixture:
     weights: np.ndarray
     means: np.ndarray
     precisions_cholesky: np.ndarray
-    iterations: int = 0
-    converged: bool = True
+    iterations: int
+    converged: bool
 
 
 #: The colour mixtures' EM: covariance regularisation (added to the diagonal), step limit and
@@ -89,17 +89,16 @@ def _fit_gmm(samples: np.ndarray, components: int, seed: int) -> Mixture:
         resp = np.zeros((n, len(x)))
         resp[labels, np.arange(len(x))] = 1.0
         nk, means, chol = _mixture_m_step(x, outer, resp, GMM_REG_COVAR)
-        mixture = Mixture(nk / len(x), means, chol)
+        mixture = Mixture(nk / len(x), means, chol, 0, False)
         lower = -np.inf
         for step in range(1, GMM_MAX_ITER + 1):
             log_prob = _weighted_log_prob(x, mixture)
             norm = _logsumexp_columns(log_prob)
             log_prob -= norm  # log responsibilities
             nk, means, chol = _mixture_m_step(x, outer, np.exp(log_prob, out=log_prob), GMM_REG_COVAR)
-            mixture = Mixture(nk / nk.sum(), means, chol, step, False)
-            change, lower = float(np.mean(norm)) - lower, float(np.mean(norm))
-            if abs(change) < GMM_TOL:
-                mixture = replace(mixture, converged=True)
+            previous, lower = lower, float(np.mean(norm))
+            mixture = Mixture(nk / nk.sum(), means, chol, step, abs(lower - previous) < GMM_TOL)
+            if mixture.converged:
                 break
     return replace(mixture, means=mixture.means + centre)
 
@@ -275,9 +274,24 @@ def hazy_ridge_logit(features: np.ndarray, field: np.ndarray, sigma: float, weig
     return weight * blue_field_weight(field) * np.clip((greyer - threshold) / 6.0, 0, 1) * no_brighter
 
 
+#: The image row's weight among the mixtures' features (the row, 0-1 down the frame, times this).
+ROW_WEIGHT = 20.0
+
+
+def mixture_inputs(features: np.ndarray, row_weight: float = ROW_WEIGHT) -> np.ndarray:
+    """(H*W, C [+ 1]) float64 rows the colour mixtures see: each pixel's features (H, W, C) and,
+    with a ``row_weight``, its row scaled to [0, row_weight] (sky colour changes with elevation angle)."""
+    H, W, C = features.shape
+    x = np.empty((H * W, C + 1 if row_weight else C))
+    x[:, :C] = features.reshape(-1, C)
+    if row_weight:
+        x[:, C] = np.repeat((np.arange(H) + 0.5) / H * row_weight, W)
+    return x
+
+
 def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np.ndarray,
-                    row_prior: np.ndarray, *, components: int = 5, max_samples: int = 12_000, row_weight: float = 20.0,
-                    seed: int = 0) -> np.ndarray:
+                    row_prior: np.ndarray, *, components: int = 5, max_samples: int = 12_000,
+                    row_weight: float = ROW_WEIGHT, seed: int = 0) -> np.ndarray:
     """(H, W) P(sky) from colour-texture mixtures fitted to the given sky / terrain pixels.
 
     ``row_prior`` (H,) is the prior P(sky) per row. Deterministic for a seed.
@@ -286,12 +300,9 @@ def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np
 
     from ..blocks import concurrently
 
-    H, W, C = features.shape
+    H, W = features.shape[:2]
     rng = np.random.default_rng(seed)
-    x = np.empty((H * W, C + 1 if row_weight else C))
-    x[:, :C] = features.reshape(-1, C)
-    if row_weight:  # sky colour changes with elevation angle: let the mixtures see the row
-        x[:, C] = np.repeat((np.arange(H) + 0.5) / H * row_weight, W)
+    x = mixture_inputs(features, row_weight)
 
     def pick(mask):
         idx = np.flatnonzero(mask.ravel())
