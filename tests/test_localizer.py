@@ -959,6 +959,39 @@ def test_horizon_costs_with_a_bounded_roll_equal_a_direct_fit_with_the_slope_hel
     assert np.all(held >= free - 1e-5)
 
 
+@pytest.mark.parametrize("terms", [2, 3])
+def test_horizon_costs_on_a_narrow_window_equal_a_direct_float64_fit(terms):
+    """A window of the skyline 18 deg wide and off the optical axis (the right half of a 35 deg
+    view) with horizons tens of degrees high: every cost near the best is the direct float64
+    weighted least-squares fit's to 1e-4 deg^2, and none is negative. In the raw basis 1, alpha,
+    alpha^2 the float32 correlations cancelled to errors of 0.02 deg^2 (negative costs), so the
+    best 200 of a window were noise when the right match costs 0.002."""
+    import scipy.fft
+
+    from skyrender.localizer.horizon_search import horizon_costs, smallest
+
+    rng = np.random.default_rng(11)
+    n_bins, bin_deg = 360, 1.0
+    P = 15.0 + np.cumsum(rng.normal(0, 0.4, (400, n_bins)), axis=1)
+    P -= np.linspace(0, 1, n_bins)[None] * (P[:, -1:] - P[:, :1])  # periodic
+    P = P.astype(np.float32)
+    spectra = scipy.fft.rfft(P, axis=1), scipy.fft.rfft(P * P, axis=1)
+    bins = np.arange(2, 20)
+    alpha = np.radians(bins * bin_deg)
+    w = rng.uniform(0.3, 1.0, len(bins))
+    e = P[7, (bins + 123) % n_bins] - 4.0 + 0.3 * alpha + rng.normal(0, 0.03, len(bins))  # horizon 7 at azimuth 123
+    cost, _ = horizon_costs(spectra, n_bins, bins, e, w, bin_deg, terms=terms)
+    X = np.column_stack([np.ones_like(alpha), alpha, alpha ** 2])[:, :terms]
+    flat = np.concatenate([smallest(cost, 200), rng.choice(cost.size, 200, replace=False)])
+    centre, azimuth = np.divmod(flat, n_bins)
+    d = P[centre][np.arange(len(flat))[:, None], (bins[None] + azimuth[:, None]) % n_bins].astype(np.float64) - e
+    sw = np.sqrt(w)
+    coef = np.linalg.lstsq(X * sw[:, None], (d * sw).T, rcond=None)[0]
+    direct = (((d - (X @ coef).T) ** 2) * w).sum(axis=1) / w.sum()
+    np.testing.assert_allclose(cost.ravel()[flat], direct, rtol=1e-3, atol=1e-4)
+    assert cost.min() > -1e-4 and smallest(cost, 1)[0] == 7 * n_bins + 123
+
+
 def test_the_smallest_horizon_costs_are_a_full_sort_s_first_k_ties_by_index():
     from skyrender.localizer.horizon_search import smallest
 

@@ -79,6 +79,12 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
     deg per deg), the other terms fitted for the held slope: a least-squares fit's cost grows
     by d^2 / (gram^-1)_11 for its slope moved by d, the others moving with it.
 
+    The fit runs in the basis 1, alpha, alpha^2 made orthonormal under the weights
+    (:func:`orthonormal_basis`): the same fit, but the float32 correlations then need no
+    cancellation between huge terms. In the raw basis a window 15-20 deg wide has a gram
+    inverse of order 10^5, and the costs came out wrong by up to 0.025 deg^2 where the
+    right ones are 0.002 (negative costs, the ranking noise).
+
     spectra : rfft over azimuth of the horizons P (N, n_bins) and of P^2.
     bins, elevation, weights : the photo's skyline (:func:`skyline_directions`).
     Azimuth bin p means the optical axis points at p * bin_deg.
@@ -86,6 +92,10 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
     spec_p, spec_p2 = spectra
     alpha = np.radians(bins * bin_deg)
     X = np.column_stack([np.ones_like(alpha), alpha, alpha ** 2])[:, :terms]
+    # Q = X T, orthonormal under the weights: the fit removes |Q^T W (P - e)|^2, and the raw
+    # coefficients are T times those of Q
+    T = orthonormal_basis(X, weights)
+    Q = X @ T
     idx = bins % n_bins
 
     def spread(values: np.ndarray) -> np.ndarray:
@@ -96,12 +106,15 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
     w = weights
     # sum w (P - e)^2 = sum w P^2 - 2 sum w e P + sum w e^2
     g_p2, g_p, sum_we2 = spread(w), spread(-2.0 * w * elevation), np.float32((w * elevation ** 2).sum())
-    # r = X^T W (P - e) per (centre, azimuth); the fit removes r^T gram^-1 r
-    g_r = [spread(w * X[:, k]) for k in range(terms)]
-    sum_r = [np.float32((w * X[:, k] * elevation).sum()) for k in range(terms)]
-    inv = np.linalg.inv((X * w[:, None]).T @ X + 1e-9 * np.eye(terms)).astype(np.float32)
+    # r = Q^T W (P - e) per (centre, azimuth); the fit removes |r|^2
+    g_r = [spread(w * Q[:, k]) for k in range(terms)]
+    sum_r = [np.float32((w * Q[:, k] * elevation).sum()) for k in range(terms)]
+    # the raw offset and slope are the rows T[0] and T[1] applied to r; holding the slope moves the
+    # cost by d^2 / |T[1]|^2 (|T[1]|^2 = (gram^-1)_11) and the offset by d T[0].T[1] / |T[1]|^2
+    T = T.astype(np.float32)
     bounded = terms > 1 and math.isfinite(max_swing_deg)
     max_slope = np.float32(np.tan(np.radians(max_swing_deg)) * 180.0 / np.pi) if bounded else None  # deg per rad
+    slope_var = np.float32(T[1] @ T[1]) if terms > 1 else None
     norm = np.float32(max(float(w.sum()), 1e-9))
 
     def slope_excess(slope: np.ndarray) -> np.ndarray:  # in place: how far each slope lies beyond the bound
@@ -125,15 +138,13 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
             rk.append(correlate(spec_p, g_r[k]))
             rk[k] -= sum_r[k]
         term = np.empty_like(c)
-        for i in range(terms):
-            for j in range(i, terms):
-                np.multiply(rk[i], rk[j], out=term)
-                term *= inv[i, j] * (1.0 if i == j else 2.0)
-                c -= term
+        for k in range(terms):
+            np.multiply(rk[k], rk[k], out=term)
+            c -= term
         if bounded:
-            excess = slope_excess(sum(inv[1, k] * rk[k] for k in range(terms)))
+            excess = slope_excess(sum(T[1, k] * rk[k] for k in range(terms)))
             np.multiply(excess, excess, out=excess)
-            excess *= np.float32(1.0 / inv[1, 1])
+            excess *= np.float32(1.0 / slope_var)
             c += excess
         c /= norm
         cost[lo:hi] = c
@@ -143,12 +154,20 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
     in_blocks(N, COST_BLOCK_ROWS, rows)
 
     def offset_at(flat: np.ndarray) -> np.ndarray:  # the fitted offset (deg) at flat indices, computed there only
-        offset = sum(inv[0, k] * r[k].ravel()[flat] for k in range(terms))
+        offset = sum(T[0, k] * r[k].ravel()[flat] for k in range(terms))
         if bounded:
-            offset -= slope_excess(sum(inv[1, k] * r[k].ravel()[flat] for k in range(terms))) * (inv[0, 1] / inv[1, 1])
+            offset -= slope_excess(sum(T[1, k] * r[k].ravel()[flat] for k in range(terms))) * (T[0] @ T[1] / slope_var)
         return offset
 
     return cost, offset_at
+
+
+def orthonormal_basis(X: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Upper-triangular T (k, k) such that the columns of X T (n, k) are orthonormal under
+    ``weights``: (X T)^T W (X T) = I. From the Cholesky factor of the gram X^T W X (float64,
+    a 1e-9 ridge as the raw fit had, so a window with fewer distinct bins than terms stays finite)."""
+    gram = (X * weights[:, None]).T @ X + 1e-9 * np.eye(X.shape[1])
+    return np.linalg.inv(np.linalg.cholesky(gram)).T
 
 
 def centre_indices(horizons: Horizons, xy: np.ndarray) -> np.ndarray:
