@@ -283,7 +283,9 @@ def test_far_horizons_equal_a_march_over_the_dem(view_terrain):
         err = np.abs(rendered - expected)
         print(f"far horizon vs march: median {np.median(err):.3f} deg, 90th pct {np.percentile(err, 90):.3f}, "
               f"max {err.max():.3f}")
-        assert np.median(err) < 0.05 and np.percentile(err, 90) < 0.25
+        # one bisected column per bin (0.125 px): median 0.023 / 0.032 deg, 90th pct 0.04 / 0.14 on these
+        # two centres; eight 96-column cameras interpolated onto the bins (before 2026-12-04) 0.035 / 0.046, 0.07 / 0.13
+        assert np.median(err) < 0.04 and np.percentile(err, 90) < 0.2
 
 
 def test_the_ground_under_a_point_is_the_mesh_surface_an_upward_ray_meets(view_terrain):

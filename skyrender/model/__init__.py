@@ -82,8 +82,8 @@ def model_cache_key(dem: DEM, params: ModelParams = ModelParams()) -> str:
 #: Bumped when a change of the code (not of the parameters) changes what a model holds, so that
 #: models cached before it are rebuilt: 2 = far horizons rendered with the per-shape frozen
 #: kernel (2d87ab4, 2026-12-02; before it, a model built in a process that had localized could
-#: hold wrongly replayed horizons).
-CACHE_GENERATION = 2
+#: hold wrongly replayed horizons); 3 = one bisected column per horizon bin (2026-12-04).
+CACHE_GENERATION = 3
 
 
 def cached_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None) -> Model:

@@ -1,14 +1,16 @@
 """Panoramic horizons: the elevation angle of the skyline all around a camera centre.
 
-Eight level cameras (pan 0, 45, ..., 315 deg, 45 deg wide) render their skylines
-(:func:`~skyrender.render.skyline.render_skylines`, optionally with a near clip);
-each column's boundary becomes an (azimuth, elevation) direction, resampled onto
-azimuth bins 0, bin, 2 bin, ... deg clockwise from grid north. Elevation angles
-are apparent ones (earth curvature and refraction as the Terrain applies them),
-so they compare directly with a photo's skyline turned into directions.
+Each azimuth bin (0, bin, 2 bin, ... deg clockwise from grid north) is one level camera of a
+single column looking exactly along it (:func:`~skyrender.render.skyline.render_skylines`,
+optionally with a near clip), so the bins are sampled where they lie, not resampled from
+evenly spaced pixel columns. Elevation angles are apparent ones (earth curvature and
+refraction as the Terrain applies them), so they compare directly with a photo's skyline
+turned into directions.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -16,41 +18,38 @@ from ..camera import Intrinsics
 from .skyline import render_skylines
 from .terrain import Terrain
 
-#: Level cameras per panorama and their columns (0.47 deg each at 45 deg wide).
-PANORAMA_CAMERAS = 8
-COLUMNS_PER_CAMERA = 96
-#: Rows: +-45 deg at the centre column; a horizon beyond that is clipped there.
+#: Rows of each bin's one-column camera, and its focal length (px): +-39.6 deg of elevation
+#: (what eight 45-degree cameras of 96 columns gave at a column's centre, before 2026-12-04).
 ROWS = 192
+F_PX = 48.0 / math.tan(math.radians(22.5))
+#: Centres rendered per call (x bins poses each): bounds the per-pose ray bases in memory.
+CENTRES_PER_CALL = 2048
 
 
 def render_horizons(terrain: Terrain, centres: np.ndarray, bin_deg: float = 0.5, near_m: float = 0.0,
-                    tol_px: float = 0.25) -> np.ndarray:
+                    tol_px: float = 0.125) -> np.ndarray:
     """(N, round(360 / bin_deg)) float32 horizon elevation angles (deg) around camera
     centres (N, 3) (world metres), ignoring terrain nearer than ``near_m`` (m).
 
-    Bin j holds azimuth j * bin_deg (deg clockwise from grid north). A column that
-    sees only sky gets the lowest elevation rendered (-45 deg at the centre column)."""
+    Bin j holds azimuth j * bin_deg (deg clockwise from grid north). A bin that sees only
+    sky gets the lowest elevation rendered (-39.6 deg). ``tol_px``: the bisection's
+    tolerance in the one-column cameras' pixels (0.125 px = 0.06 deg).
+
+    Why one column per bin: eight 45-degree cameras of 96 columns each (768 columns, bisected to
+    0.25 px), linearly interpolated onto 360 one-degree bins, traced twice the rays of 360 columns
+    bisected one step further, and were no closer to a march over the DEM (2026-12-04,
+    ``experiments/scale/one-column-horizons/``)."""
     centres = np.atleast_2d(np.asarray(centres, np.float64))
     n_bins = int(round(360.0 / bin_deg))
-    if len(centres) == 0:
-        return np.zeros((0, n_bins), np.float32)
-    k = Intrinsics.from_fov(360.0 / PANORAMA_CAMERAS, COLUMNS_PER_CAMERA, ROWS)
-    pans = np.arange(PANORAMA_CAMERAS) * 360.0 / PANORAMA_CAMERAS
-    poses = np.zeros((len(centres) * PANORAMA_CAMERAS, 6))
-    poses[:, :3] = np.repeat(centres, PANORAMA_CAMERAS, axis=0)
-    poses[:, 3] = np.tile(pans, len(centres))
-    v = render_skylines(terrain, poses, k, tol=tol_px, near_m=near_m)
-    off = np.arange(COLUMNS_PER_CAMERA) + 0.5 - k.cx
-    v = np.where(np.isnan(v), float(ROWS), v)
-    elevation = np.degrees(np.arctan2(k.cy - v, np.hypot(k.f_px, off)))
-    azimuth = (pans[:, None] + np.degrees(np.arctan(off / k.f_px))).ravel()  # the same for every centre
-    order = np.argsort(azimuth % 360.0)
-    azimuth = azimuth[order] % 360.0
-    elevation = elevation.reshape(len(centres), -1)[:, order]
-    # linear interpolation onto the bins, periodic in azimuth, for every centre at once
-    grid = np.arange(n_bins) * bin_deg
-    ext_az = np.r_[azimuth[-1] - 360.0, azimuth, azimuth[0] + 360.0]
-    j = np.clip(np.searchsorted(ext_az, grid, side="right") - 1, 0, len(ext_az) - 2)
-    w = (grid - ext_az[j]) / (ext_az[j + 1] - ext_az[j])
-    ext_el = np.concatenate([elevation[:, -1:], elevation, elevation[:, :1]], axis=1)
-    return ((1.0 - w) * ext_el[:, j] + w * ext_el[:, j + 1]).astype(np.float32)
+    out = np.empty((len(centres), n_bins), np.float32)
+    k = Intrinsics(1, ROWS, F_PX, 0.5, ROWS / 2.0)  # the column's centre u = 0.5 looks along the pan
+    pans = np.arange(n_bins) * bin_deg
+    for start in range(0, len(centres), CENTRES_PER_CALL):
+        chunk = centres[start:start + CENTRES_PER_CALL]
+        poses = np.zeros((len(chunk) * n_bins, 6))
+        poses[:, :3] = np.repeat(chunk, n_bins, axis=0)
+        poses[:, 3] = np.tile(pans, len(chunk))
+        v = render_skylines(terrain, poses, k, tol=tol_px, near_m=near_m)[:, 0]
+        v = np.where(np.isnan(v), float(ROWS), v)
+        out[start:start + len(chunk)] = np.degrees(np.arctan2(k.cy - v, k.f_px)).reshape(len(chunk), n_bins)
+    return out
