@@ -567,6 +567,30 @@ def test_the_photo_confidence_fit_takes_the_runner_up_distance_that_keeps_most_r
     assert b > 0 and 0.5 <= fit["min_confidence"] <= 1.0
 
 
+def test_the_fov_unknown_threshold_clears_that_mode_s_wrong_training_answers_and_applies_to_its_rows_only():
+    """With the fov unknown a wrong answer can win by a margin no fov-known one does: its threshold is
+    the same rule on training rows localized that way, never below the fov-known one, and the
+    localizer and a benchmark rescore apply it to fov-unknown answers only."""
+    from skyrender.benchmarks.real_localize import rescore
+    from skyrender.localizer import LocalizeParams
+    from skyrender.training.localize_fit import fov_unknown_threshold
+
+    logit = (-3.0, 20.0)  # margins 0.3 -> 0.95, 0.5 -> 1.0, 0.05 -> 0.12
+    rows = [{"photo": "r", "error_m": 300.0, "best_score": 1.0, "runner_up_score": 2.0},
+            {"photo": "w", "error_m": 34000.0, "best_score": 1.4, "runner_up_score": 2.0},
+            {"photo": "x", "error_m": None, "best_score": 1.9, "runner_up_score": 2.0}]
+    assert fov_unknown_threshold(rows, logit, 1000.0, 0.9) == pytest.approx(1.0)  # above the wrong 0.95
+    assert fov_unknown_threshold(rows[::2], logit, 1000.0, 0.9) == 0.9  # never below the fov-known threshold
+    params = LocalizeParams(min_confidence=0.9, min_confidence_fov_unknown=0.97)
+    assert params.abstain_below(False) == 0.9 and params.abstain_below(True) == 0.97
+    assert LocalizeParams(min_confidence=0.8).abstain_below(True) == 0.8  # unset: the same for both
+    photo = LocalizeParams.for_photos()
+    assert photo.abstain_below(True) >= photo.abstain_below(False)
+    run = [dict(rows[1], status="localized", confidence=0.95, fov_mode=mode) for mode in ("known", "unknown")]
+    out = rescore(run, logit, 0.9, 1000.0, 0.97)
+    assert [r["status"] for r in out] == ["localized", "abstained"]
+
+
 def test_the_photo_abstention_threshold_clears_every_wrong_training_answer():
     from skyrender.training.localize_fit import abstain_threshold
 

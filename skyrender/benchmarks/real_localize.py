@@ -151,9 +151,11 @@ def margin_of(row: dict, runner_up_m: float = 1000.0) -> float:
     return 1.0 - best / runner if runner else 1.0
 
 
-def rescore(rows: list[dict], logit: tuple[float, float], threshold: float, runner_up_m: float = 1000.0) -> list[dict]:
+def rescore(rows: list[dict], logit: tuple[float, float], threshold: float, runner_up_m: float = 1000.0,
+            threshold_fov_unknown: float | None = None) -> list[dict]:
     """The rows under another photo confidence (logistic ``logit`` of the margin to the best
-    refined pose farther than ``runner_up_m``, :func:`margin_of`; abstaining below ``threshold``):
+    refined pose farther than ``runner_up_m``, :func:`margin_of`; abstaining below ``threshold``, or
+    ``threshold_fov_unknown`` on the rows localized with the fov unknown when given):
     the poses do not depend on it, so an answer stays or becomes an abstention (its error kept as
     ``withheld_error_m``). An abstention that the new confidence would answer needs a new run
     (its pose was not kept): ValueError."""
@@ -165,9 +167,10 @@ def rescore(rows: list[dict], logit: tuple[float, float], threshold: float, runn
         margin = margin_of(r, runner_up_m)
         if np.isfinite(margin):
             r["confidence"] = float(margin_logistic(margin, logit))
-        if r["status"] == "localized" and r["confidence"] < threshold:
+        needed = threshold_fov_unknown if r.get("fov_mode") == "unknown" and threshold_fov_unknown is not None else threshold
+        if r["status"] == "localized" and r["confidence"] < needed:
             r["status"], r["withheld_error_m"] = "abstained", r.pop("error_m")
-        elif r["status"] != "localized" and r["confidence"] >= threshold:
+        elif r["status"] != "localized" and r["confidence"] >= needed:
             raise ValueError(f"{r['photo']}: abstained in the run but answers now; run the benchmark again")
         out.append(r)
     return out
@@ -223,21 +226,28 @@ def main(argv=None) -> int:
             print(f"--set: {exc}")
             return 2
     if args.no_abstain:
-        params = LocalizeParams.from_dict({"min_confidence": 0.0}, params)
+        params = LocalizeParams.from_dict({"min_confidence": 0.0, "min_confidence_fov_unknown": 0.0}, params)
     name = f"bench-real-{args.side}{'-' + args.tag if args.tag else ''}"
     if args.retable:  # rewrite the text table of a finished run from its JSON
         with open(os.path.join(args.out, f"{name}.json")) as f:
             report = json.load(f)
         if args.rescore:
-            from ..localizer.pipeline import PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE, PHOTO_RUNNER_UP_M
+            from ..localizer.pipeline import (
+                PHOTO_MARGIN_LOGIT,
+                PHOTO_MIN_CONFIDENCE,
+                PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN,
+                PHOTO_RUNNER_UP_M,
+            )
 
             if any("refined_poses" not in r for r in report["photos"]) and PHOTO_RUNNER_UP_M != 1000.0:
                 print(f"--rescore: {name} keeps no refined poses, so its runner-ups beyond {PHOTO_RUNNER_UP_M:.0f} m "
                       "are unknown; run the benchmark again")
                 return 2
-            report["photos"] = rescore(report["photos"], PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE, PHOTO_RUNNER_UP_M)
+            report["photos"] = rescore(report["photos"], PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE, PHOTO_RUNNER_UP_M,
+                                       PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN)
             report["rescored"] = {"at": git_commit(), "logit": list(PHOTO_MARGIN_LOGIT),
-                                  "min_confidence": PHOTO_MIN_CONFIDENCE, "runner_up_m": PHOTO_RUNNER_UP_M}
+                                  "min_confidence": PHOTO_MIN_CONFIDENCE, "runner_up_m": PHOTO_RUNNER_UP_M,
+                                  "min_confidence_fov_unknown": PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN}
     else:
         # rows are appended to <name>.rows.jsonl as they come, so an interrupted run resumes
         os.makedirs(args.out, exist_ok=True)
@@ -274,7 +284,9 @@ def main(argv=None) -> int:
         if "rescored" in report:
             rs = report["rescored"]
             head += (f"; confidences rescored at {rs['at']} (logit {rs['logit'][0]:.3f} + {rs['logit'][1]:.3f} m, "
-                     f"runner-up beyond {rs.get('runner_up_m', 1000.0):.0f} m, abstain below {rs['min_confidence']:.2f})")
+                     f"runner-up beyond {rs.get('runner_up_m', 1000.0):.0f} m, abstain below {rs['min_confidence']:.2f}"
+                     + (f", with the fov unknown below {rs['min_confidence_fov_unknown']:.2f}"
+                        if rs.get("min_confidence_fov_unknown", rs["min_confidence"]) != rs["min_confidence"] else "") + ")")
         f.write(f"{head}\n\n{text}\n")
     if not args.retable and os.path.exists(rows_path):
         os.remove(rows_path)  # the run is whole in <name>.json; a new run with this tag starts afresh

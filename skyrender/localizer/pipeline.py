@@ -77,6 +77,9 @@ PHOTO_MARGIN_LOGIT = _photo_margin_logit(_FIT)
 #: the training photos (``localize_fit.abstain_threshold``): above every wrong answer there, and
 #: at least 0.5.
 PHOTO_MIN_CONFIDENCE = float(_FIT.get("min_confidence", 0.8))
+#: ... and with the fov unknown (11 focal lengths searched, margins of another kind): the same rule on
+#: training photos localized that way, never below :data:`PHOTO_MIN_CONFIDENCE`.
+PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN = float(_FIT.get("min_confidence_fov_unknown", PHOTO_MIN_CONFIDENCE))
 #: The photo confidence's runner-up is the best refined pose farther than this (m) from the
 #: answer, chosen with the logistic on the training photos (``localize_fit``).
 PHOTO_RUNNER_UP_M = float(_FIT.get("runner_up_m", 1000.0))
@@ -120,6 +123,7 @@ class LocalizeParams:
     stall_chunks: int = 8
     stall_gain: float = 0.0
     min_confidence: float = 0.7  # abstain below this (wrong poses scored 0.51-0.59 on test views)
+    min_confidence_fov_unknown: float | None = None  # ... when the fov is unknown (None: min_confidence)
     same_pose_m: float = 150.0  # candidates closer than this (and same heading) are one
     runner_up_m: float | None = None  # confidence: the runner-up is the best refined pose this far away (None: distinct)
     confidence_model: str = "agreement"  # "agreement" (renders) or "margin": P(right) from the runner-up's margin
@@ -145,6 +149,13 @@ class LocalizeParams:
     # (bench-localize view 7: the right hypothesis solved 283 m off, verified 272nd of 318; swept, first at 4 m)
     weak_sweep: WeakSweepParams = field(default_factory=WeakSweepParams)
 
+    def abstain_below(self, fov_unknown: bool) -> float:
+        """The confidence an answer needs: ``min_confidence``, or with the fov unknown
+        ``min_confidence_fov_unknown`` where set."""
+        if fov_unknown and self.min_confidence_fov_unknown is not None:
+            return self.min_confidence_fov_unknown
+        return self.min_confidence
+
     @classmethod
     def for_photos(cls) -> "LocalizeParams":
         """Real photographs, where the DEM never matches exactly (the oracle fit at the
@@ -165,6 +176,7 @@ class LocalizeParams:
                    max_horizon_refinements=16,
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=PHOTO_RUNNER_UP_M, confidence_model="margin",
                    margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,
+                   min_confidence_fov_unknown=PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN,
                    score=ScoreParams(max_swing_deg=PHOTO_MAX_SWING_DEG),
                    horizon=HorizonSearchParams(tilts=(-10.0, 0.0, 10.0, 20.0, 30.0), terms=2, rank_by_cost=True))
 
@@ -677,7 +689,7 @@ def _decide(search: _Search, accepted: _Candidate | None, t_start: float) -> Loc
                                            params.margin_logit)
         else:
             confidence = confidence_of(best.refined, runner_up)
-    if best is None or confidence < params.min_confidence:
+    if best is None or confidence < params.abstain_below(search.fov is None):
         # an abstention keeps the confidence it fell short with (0 when nothing was refined)
         return LocalizationResult("abstained", None, None, confidence, time.perf_counter() - t_start, stats.evaluated,
                                   stats, search.intrinsics(search.fovs[0]), search.sky)

@@ -45,6 +45,10 @@ RUNNER_UP_M = 1000.0
 TRAINING_ROWS_FILE = os.path.join(REPO, "experiments", "ch1", "confidence-train-rows.json")
 
 
+def _validation_keys() -> list[str]:
+    return [it.key for it in items_on_side("validation")]
+
+
 def fit_logistic(margin: np.ndarray, right: np.ndarray, ridge: float = 1e-3) -> tuple[float, float]:
     """(a, b) maximising the likelihood of ``right`` (bool) under logistic(a + b margin),
     with a small ridge on b (separable data would send it to infinity)."""
@@ -91,6 +95,17 @@ def fit_confidence(rows: list[dict], choices_m=RUNNER_UP_CHOICES_M) -> dict:
                      for r, m in zip(rows, fit["margin"])]}
 
 
+def fov_unknown_threshold(rows: list[dict], logit: tuple[float, float], runner_up_m: float, floor: float) -> float:
+    """The abstention threshold with the fov unknown: :func:`abstain_threshold` (the same rule) on
+    training rows localized that way, scored with the fov-known fit ``logit``; never below ``floor``
+    (the fov-known threshold). A fov-unknown search tries 11 focal lengths, and its wrong answers
+    can win by margins the fov-known ones never do."""
+    right = np.array([(r.get("error_m") if r.get("error_m") is not None else np.inf) <= RIGHT_M for r in rows])
+    margin = np.array([margin_of(r, runner_up_m) for r in rows])
+    confidence = np.where(np.isfinite(margin), margin_logistic(np.nan_to_num(margin), logit), 0.0)
+    return max(floor, abstain_threshold(confidence, right))
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--limit", type=int, default=0, help="at most N photos, spread over the places")
@@ -104,7 +119,21 @@ def main(argv=None) -> int:
     parser.add_argument("--runner-up-choices", action="store_true",
                         help=f"choose the runner-up distance among {', '.join(f'{d:.0f}' for d in RUNNER_UP_CHOICES_M)} m "
                         f"on the training photos (default: {RUNNER_UP_M:.0f} m; see RUNNER_UP_CHOICES_M)")
+    parser.add_argument("--fov-unknown-rows", default=None, metavar="JSON",
+                        help="a `real_localize --side train --fov unknown --no-abstain` run's JSON: the threshold with "
+                        "the fov unknown is set on its rows (fov_unknown_threshold)")
     args = parser.parse_args(argv)
+    unknown_rows = None
+    if args.fov_unknown_rows:
+        try:
+            with open(args.fov_unknown_rows) as f:
+                unknown_rows = [r for r in json.load(f)["photos"] if r["fov_mode"] == "unknown"]
+        except (OSError, ValueError, KeyError) as exc:
+            print(f"--fov-unknown-rows: cannot read {args.fov_unknown_rows}: {exc}")
+            return 2
+        if set(r["photo"] for r in unknown_rows) & set(_validation_keys()):
+            print("--fov-unknown-rows: the rows hold validation photos; only training-side rows may set the threshold")
+            return 2
     if args.from_rows:
         try:
             with open(args.rows) as f:
@@ -131,12 +160,18 @@ def main(argv=None) -> int:
             json.dump({"commit": rows_commit, "rows": rows}, f)
     choices = RUNNER_UP_CHOICES_M if args.runner_up_choices else (RUNNER_UP_M,)
     out = {"commit": git_commit(), "localized_at": rows_commit, **fit_confidence(rows, choices)}
+    if unknown_rows:
+        out["min_confidence_fov_unknown"] = fov_unknown_threshold(unknown_rows, out["logit"], out["runner_up_m"],
+                                                                  out["min_confidence"])
+        out["fov_unknown_rows"] = {"file": os.path.relpath(args.fov_unknown_rows, REPO), "photos": len(unknown_rows)}
     with open(args.out, "w") as f:
         json.dump(out, f, indent=1)
     (a, b), kept = out["logit"], out["kept_by_runner_up_m"]
     print(f"{len(rows)} photos, {out['right']} within {RIGHT_M:.0f} m; logit a = {a:.3f}, b = {b:.3f}; "
           f"abstain below {out['min_confidence']:.2f}; runner-up beyond {out['runner_up_m']:.0f} m "
-          f"(right answers kept: {', '.join(f'{d} m {k}' for d, k in kept.items())}); wrote {args.out}")
+          f"(right answers kept: {', '.join(f'{d} m {k}' for d, k in kept.items())})"
+          + (f"; fov unknown: abstain below {out['min_confidence_fov_unknown']:.2f} ({len(unknown_rows)} photos)"
+             if unknown_rows else "") + f"; wrote {args.out}")
     return 0
 
 
