@@ -15,7 +15,10 @@ the same valley, and is no evidence against the answer; ``--runner-up-choices``,
 default: the 3 km it chose did not hold on the validation side). Fit, D and rows go to
 ``skyrender/localizer/photo_confidence.json``, which the photo preset reads; the
 localization rows (refined poses, truth) to ``experiments/ch1/confidence-train-rows.json``,
-from which ``--from-rows`` refits without localizing. The validation side is never used here.
+from which ``--from-rows`` refits without localizing. With ``--fov-unknown-rows`` (a ``real_localize --side
+train --fov unknown --no-abstain`` run's JSON; ``make fit-photo-confidence`` passes
+``experiments/ch1/fov-unknown-train/``'s) the fov-unknown mode gets a threshold of its own by the same rule
+(:func:`fov_unknown_threshold`). The validation side is never used here.
 """
 
 from __future__ import annotations
