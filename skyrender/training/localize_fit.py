@@ -72,12 +72,22 @@ def abstain_threshold(confidence: np.ndarray, right: np.ndarray, floor: float = 
     return float(min(1.0, max(floor, np.ceil((top + 1e-9) / step) * step)))
 
 
+def rows_right(rows: list[dict]) -> np.ndarray:
+    """(n,) bool: each benchmark row's answer within :data:`RIGHT_M` of the truth (no answer: wrong)."""
+    return np.array([(r.get("error_m") if r.get("error_m") is not None else np.inf) <= RIGHT_M for r in rows])
+
+
+def confidences(margin: np.ndarray, logit: tuple[float, float]) -> np.ndarray:
+    """The photo confidence of each ``margin`` under ``logit`` (NaN: no pose, confidence 0)."""
+    return np.where(np.isfinite(margin), margin_logistic(np.nan_to_num(margin), logit), 0.0)
+
+
 def fit_at(margin: np.ndarray, right: np.ndarray) -> dict:
     """The logistic of ``margin`` (NaN: no pose, confidence 0) for ``right`` (bool), its
     training confidences and abstention threshold."""
     ok = np.isfinite(margin)
     a, b = fit_logistic(margin[ok], right[ok].astype(float))
-    confidence = np.where(ok, margin_logistic(np.nan_to_num(margin), (a, b)), 0.0)
+    confidence = confidences(margin, (a, b))
     return {"logit": (a, b), "margin": margin, "confidence": confidence, "threshold": abstain_threshold(confidence, right)}
 
 
@@ -86,7 +96,7 @@ def fit_confidence(rows: list[dict], choices_m=RUNNER_UP_CHOICES_M) -> dict:
     runner-up distance in ``choices_m`` (m) the logistic and its threshold (:func:`fit_at`);
     the distance whose fit keeps the most right answers above its threshold is taken (ties:
     the nearest). Returns what ``photo_confidence.json`` holds, less the commits."""
-    right = np.array([(r.get("error_m") if r.get("error_m") is not None else np.inf) <= RIGHT_M for r in rows])
+    right = rows_right(rows)
     fits = {d: fit_at(np.array([margin_of(r, d) for r in rows]), right) for d in choices_m}
     kept = {d: int(np.sum((fit["confidence"] >= fit["threshold"]) & right)) for d, fit in fits.items()}
     runner_up_m = max(choices_m, key=lambda d: (kept[d], -d))
@@ -103,10 +113,8 @@ def fov_unknown_threshold(rows: list[dict], logit: tuple[float, float], runner_u
     training rows localized that way, scored with the fov-known fit ``logit``; never below ``floor``
     (the fov-known threshold). A fov-unknown search tries 11 focal lengths, and its wrong answers
     can win by margins the fov-known ones never do."""
-    right = np.array([(r.get("error_m") if r.get("error_m") is not None else np.inf) <= RIGHT_M for r in rows])
-    margin = np.array([margin_of(r, runner_up_m) for r in rows])
-    confidence = np.where(np.isfinite(margin), margin_logistic(np.nan_to_num(margin), logit), 0.0)
-    return max(floor, abstain_threshold(confidence, right))
+    confidence = confidences(np.array([margin_of(r, runner_up_m) for r in rows]), logit)
+    return max(floor, abstain_threshold(confidence, rows_right(rows)))
 
 
 def main(argv=None) -> int:
