@@ -497,6 +497,11 @@ def test_photo_confidence_is_a_logistic_of_the_margin_to_the_runner_up():
     assert margin_confidence(1.0, np.inf, (-2.0, 4.0)) == pytest.approx(1.0 / (1.0 + np.exp(-2.0)))  # no runner-up
     # a runner-up as good as the best leaves only the prior; a better margin raises it
     assert margin_confidence(2.0, 2.0, (-3.0, 10.0)) < margin_confidence(1.5, 2.0, (-3.0, 10.0))
+    # the score term: at the same margin the better fit is the surer, and a score means the same at any width
+    logit = (0.2, 17.0, -5.4)
+    assert margin_confidence(1.0, 1.2, logit) > margin_confidence(2.0, 2.4, logit)
+    assert margin_confidence(1.0, 1.2, logit) == pytest.approx(1 / (1 + np.exp(-(0.2 + 17.0 * (1 - 1 / 1.2)))))
+    assert margin_confidence(4.0, 4.8, logit, width_px=4096) == pytest.approx(margin_confidence(1.0, 1.2, logit))
     photo = LocalizeParams.for_photos()
     assert photo.confidence_model == "margin" and photo.runner_up_m >= 1000.0 and photo.horizon.terms == 2
 
@@ -516,6 +521,8 @@ def test_a_benchmark_run_is_rescored_under_another_confidence_without_moving_a_p
     assert rows[1]["status"] == "localized"  # the input is left as it was
     with pytest.raises(ValueError, match="run the benchmark again"):
         rescore(rows, (5.0, 0.0), 0.5)  # would answer for c, whose pose the run did not keep
+    again = rescore(out[:2], (-3.0, 20.0), 0.1)  # b's withheld answer is given again under a lower threshold
+    assert again[1]["status"] == "localized" and again[1]["error_m"] == 40000.0 and "withheld_error_m" not in again[1]
 
 
 def test_the_runner_up_is_the_best_pose_beyond_the_distance():
@@ -559,12 +566,47 @@ def test_the_photo_confidence_fit_takes_the_runner_up_distance_that_keeps_most_r
         best = 1.5 + 0.05 * n
         rows.append({"photo": f"w{n}", "error_m": 30000.0, "seconds": 1.0, "refined_poses": [
             [0, 0, 2, 0, 0, 0, 800, best], [8000, 0, 2, 0, 0, 0, 800, best * (1.01 + 0.002 * n)]]})
-    fit = fit_confidence(rows, choices_m=(1000.0, 3000.0, 10000.0))
+    fit = fit_confidence(rows, choices_m=(1000.0, 3000.0, 10000.0), score_term=False)  # the margin alone
     # beyond 1 km the near rivals hold back half the right answers, beyond 3 km none
     assert fit["runner_up_m"] == 3000.0 and fit["right"] == 12 and fit["photos"] == 24
     assert fit["kept_by_runner_up_m"] == {"1000": 6, "3000": 12, "10000": 0}  # 10 km: no rival left, no margin
     a, b = fit["logit"]
     assert b > 0 and 0.5 <= fit["min_confidence"] <= 1.0
+    assert set(fit["leave_place_out"]) == {"margin", "margin+score"}
+    assert len(fit_confidence(rows, choices_m=(3000.0,), score_term=True)["logit"]) == 3
+
+
+def test_the_score_term_answers_right_answers_the_margin_alone_cannot_tell_from_wrong_ones():
+    """Right answers that win by small margins but fit well, wrong ones with the same margins that fit
+    badly: the margin alone must withhold the right ones, margin and score (``--score-term``) answer
+    them; judged a place at a time (here every photo its own place)."""
+    from skyrender.training.localize_fit import fit_confidence
+
+    rows = []
+    for n in range(10):
+        margin = 0.05 + 0.03 * n  # the same margins for right and wrong answers
+        for name, best, error in (("r", 0.8 + 0.02 * n, 200.0), ("w", 2.0 + 0.1 * n, 40000.0)):
+            rows.append({"photo": f"{name}{n}", "error_m": error, "seconds": 1.0, "refined_poses": [
+                [0, 0, 2, 0, 0, 0, 800, best], [9000, 0, 2, 0, 0, 0, 800, best / (1 - margin)]]})
+    fit = fit_confidence(rows, choices_m=(1000.0,), score_term=True)
+    out = fit["leave_place_out"]
+    assert out["margin+score"]["right"] >= 8 and out["margin+score"]["wrong"] == 0
+    assert out["margin"]["right"] <= 2
+    assert fit["logit"][2] < 0  # a higher score, a lower confidence
+
+
+def test_leaving_out_a_place_judges_its_burst_by_the_other_places_only():
+    """Five near-identical wrong answers from one place, with a margin no other wrong answer reaches:
+    a photo judged by a fit on its own burst is withheld, the place judged by the other places is not
+    (the honest count, since the split holds out places)."""
+    from skyrender.training.localize_fit import leave_place_out
+
+    margin = np.r_[np.linspace(0.2, 0.6, 10), np.linspace(0.0, 0.1, 10), np.full(5, 0.3)]
+    right = np.r_[np.ones(10, bool), np.zeros(15, bool)]
+    log_best = np.zeros(25)
+    one_by_one = leave_place_out(margin, log_best, right, np.arange(25).astype(str), score_term=False)
+    by_place = leave_place_out(margin, log_best, right, np.r_[np.arange(20).astype(str), ["P"] * 5], score_term=False)
+    assert one_by_one["wrong"] == 0 and by_place["wrong"] == 5
 
 
 def test_the_fov_unknown_threshold_clears_that_mode_s_wrong_training_answers_and_applies_to_its_rows_only():

@@ -102,7 +102,7 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
             result = localize(image, model, 2.0, fov, terrain=terrain, skyline=skyline, params=params)
             seconds = time.perf_counter() - t
             row = {"photo": it.key, "fov_mode": mode, "status": result.status, "confidence": result.confidence,
-                   "seconds": seconds, "model_seconds": model_seconds, "window": window,
+                   "seconds": seconds, "model_seconds": model_seconds, "window": window, "width": image.shape[1],
                    "stage_seconds": result.stats.to_dict()["seconds"], "best_score": result.stats.best_score,
                    "runner_up_score": result.stats.runner_up_score, "truth_xy": [tx, ty],
                    "refined_poses": [list(r) for r in result.stats.refined_poses]}
@@ -151,14 +151,34 @@ def margin_of(row: dict, runner_up_m: float = 1000.0) -> float:
     return 1.0 - best / runner if runner else 1.0
 
 
-def rescore(rows: list[dict], logit: tuple[float, float], threshold: float, runner_up_m: float = 1000.0,
+def log_best_of(row: dict) -> float:
+    """ln of the row's best refined score, rescaled to the reference width (:func:`pipeline.log_score`;
+    the row's ``width``, else 1024 px: every CH1 photo); the best as :func:`margin_of` takes it; NaN
+    without a pose."""
+    from ..localizer.pipeline import SCORE_REFERENCE_WIDTH_PX, log_score
+
+    poses = np.asarray(row.get("refined_poses") or [], np.float64).reshape(-1, 8)
+    best = poses[:, 7].min() if len(poses) else row.get("best_score")
+    if best is None:
+        return float("nan")
+    return float(log_score(best, row.get("width", SCORE_REFERENCE_WIDTH_PX)))
+
+
+def logit_text(logit) -> str:
+    """A photo-confidence logit as a formula: a + b m (+ c ln s)."""
+    return f"{logit[0]:.3f} + {logit[1]:.3f} m" + (f" {logit[2]:+.3f} ln s" if len(logit) > 2 else "")
+
+
+def rescore(rows: list[dict], logit: tuple, threshold: float, runner_up_m: float = 1000.0,
             threshold_fov_unknown: float | None = None) -> list[dict]:
     """The rows under another photo confidence (logistic ``logit`` of the margin to the best
-    refined pose farther than ``runner_up_m``, :func:`margin_of`; abstaining below ``threshold``, or
+    refined pose farther than ``runner_up_m``, :func:`margin_of`, and of the best score,
+    :func:`log_best_of`; abstaining below ``threshold``, or
     ``threshold_fov_unknown`` on the rows localized with the fov unknown when given):
     the poses do not depend on it, so an answer stays or becomes an abstention (its error kept as
-    ``withheld_error_m``). An abstention that the new confidence would answer needs a new run
-    (its pose was not kept): ValueError."""
+    ``withheld_error_m``), and an answer an earlier rescore withheld is given again. An abstention of
+    the run itself that the new confidence would answer needs a new run (its pose was not kept):
+    ValueError."""
     from ..localizer.pipeline import margin_logistic
 
     out = []
@@ -166,10 +186,12 @@ def rescore(rows: list[dict], logit: tuple[float, float], threshold: float, runn
         r = dict(r)
         margin = margin_of(r, runner_up_m)
         if np.isfinite(margin):
-            r["confidence"] = float(margin_logistic(margin, logit))
+            r["confidence"] = float(margin_logistic(margin, logit, log_best_of(r)))
         needed = threshold_fov_unknown if r.get("fov_mode") == "unknown" and threshold_fov_unknown is not None else threshold
         if r["status"] == "localized" and r["confidence"] < needed:
             r["status"], r["withheld_error_m"] = "abstained", r.pop("error_m")
+        elif r["status"] != "localized" and r["confidence"] >= needed and "withheld_error_m" in r:
+            r["status"], r["error_m"] = "localized", r.pop("withheld_error_m")  # withheld by an earlier rescore
         elif r["status"] != "localized" and r["confidence"] >= needed:
             raise ValueError(f"{r['photo']}: abstained in the run but answers now; run the benchmark again")
         out.append(r)
@@ -283,7 +305,7 @@ def main(argv=None) -> int:
             head += f"; photo preset with {json.dumps(report['overrides'])}"
         if "rescored" in report:
             rs = report["rescored"]
-            head += (f"; confidences rescored at {rs['at']} (logit {rs['logit'][0]:.3f} + {rs['logit'][1]:.3f} m, "
+            head += (f"; confidences rescored at {rs['at']} (logit {logit_text(rs['logit'])}, "
                      f"runner-up beyond {rs.get('runner_up_m', 1000.0):.0f} m, abstain below {rs['min_confidence']:.2f}"
                      + (f", with the fov unknown below {rs['min_confidence_fov_unknown']:.2f}"
                         if rs.get("min_confidence_fov_unknown", rs["min_confidence"]) != rs["min_confidence"] else "") + ")")

@@ -63,12 +63,12 @@ def _photo_confidence_fit() -> dict:
         return {}  # not fitted yet
 
 
-def _photo_margin_logit(fit: dict) -> tuple[float, float]:
+def _photo_margin_logit(fit: dict) -> tuple[float, ...]:
     try:
-        a, b = fit["logit"]
-        return float(a), float(b)
+        logit = tuple(float(v) for v in fit["logit"])
     except (KeyError, TypeError, ValueError):
         return 0.0, 1.0
+    return logit if len(logit) in (2, 3) else (0.0, 1.0)
 
 
 _FIT = _photo_confidence_fit()
@@ -127,7 +127,9 @@ class LocalizeParams:
     same_pose_m: float = 150.0  # candidates closer than this (and same heading) are one
     runner_up_m: float | None = None  # confidence: the runner-up is the best refined pose this far away (None: distinct)
     confidence_model: str = "agreement"  # "agreement" (renders) or "margin": P(right) from the runner-up's margin
-    margin_logit: tuple = (0.0, 1.0)  # "margin": P = 1 / (1 + exp(-(a + b (1 - best / runner-up score))))
+    # "margin": P = 1 / (1 + exp(-(a + b m + c ln s))), m = 1 - best / runner-up score, s the best score (px at
+    # SCORE_REFERENCE_WIDTH_PX wide); (a, b) or (a, b, c): margin_logistic
+    margin_logit: tuple = (0.0, 1.0)
     ordered: bool = True  # probabilistic ordering (False: a seeded arbitrary order)
     use_horizons: bool = True  # also match the skyline against the model's far horizons (no peaks needed)
     horizon: HorizonSearchParams = field(default_factory=HorizonSearchParams)
@@ -167,8 +169,9 @@ class LocalizeParams:
         with the learned extractor alone, ``experiments/ch1/select/``). Three-point hypotheses
         are off (on CH1 their peaks are rarely DEM peaks; generating them took 10-30 s). The refined scores of right and
         wrong poses overlap (1.1-2.4 vs 1.1-4.0 px on CH1 training photos), but the
-        margin to the best pose farther away (:data:`PHOTO_RUNNER_UP_M`) separates them, so the
-        confidence is a logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`).
+        margin to the best pose farther away (:data:`PHOTO_RUNNER_UP_M`) separates them better, and
+        the two together best, so the confidence is a logistic of that margin and the log of the best
+        score fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`, :func:`margin_logistic`).
         The camera roll stays within :data:`PHOTO_MAX_SWING_DEG` in the verification's alignment
         and the refinement: wrong places fitted with 10-50 deg of it (held in the far-horizon
         fit too, ``HorizonSearchParams.max_swing_deg``, it lost a confident answer on the CH1 dev photos)."""
@@ -371,17 +374,31 @@ def runner_up_index(xy: np.ndarray, scores: np.ndarray, best: int, runner_up_m: 
     return int(np.flatnonzero(far)[np.argmin(scores[far])]) if far.any() else None
 
 
-def margin_logistic(margin, logit: tuple):
-    """P(right) = 1 / (1 + exp(-(a + b m))) of the margin m (scalar or array) for ``logit`` = (a, b)."""
-    a, b = logit
-    return 1.0 / (1.0 + np.exp(-(a + b * np.asarray(margin, np.float64))))
+#: The photo confidence reads the best score as if the photo were this wide (px), so that it means the
+#: same on a photo of any size (the CH1 photos it is fitted on are 1024 px wide).
+SCORE_REFERENCE_WIDTH_PX = 1024.0
 
 
-def margin_confidence(best_score: float, runner_up_score: float, logit: tuple) -> float:
-    """P(right) from the relative margin m = 1 - best / runner-up (scores in px, lower is
-    better), :func:`margin_logistic`; no runner-up is m = 1."""
+def log_score(score_px, width_px: float = SCORE_REFERENCE_WIDTH_PX):
+    """ln of a refined verification score ``score_px`` (px, scalar or array) of a photo ``width_px``
+    wide, rescaled to :data:`SCORE_REFERENCE_WIDTH_PX` (floored at 1e-3 px: a perfect fit is finite)."""
+    return np.log(np.maximum(np.asarray(score_px, np.float64) * SCORE_REFERENCE_WIDTH_PX / width_px, 1e-3))
+
+
+def margin_logistic(margin, logit: tuple, log_best=0.0):
+    """P(right) = 1 / (1 + exp(-(a + b m + c l))) of the margin m and the log best score l
+    (:func:`log_score`; scalars or arrays) for ``logit`` = (a, b, c), or (a, b): no score term."""
+    a, b, c = (*logit, 0.0)[:3]
+    return 1.0 / (1.0 + np.exp(-(a + b * np.asarray(margin, np.float64) + c * np.asarray(log_best, np.float64))))
+
+
+def margin_confidence(best_score: float, runner_up_score: float, logit: tuple,
+                      width_px: float = SCORE_REFERENCE_WIDTH_PX) -> float:
+    """P(right) from the relative margin m = 1 - best / runner-up (scores in px of a photo
+    ``width_px`` wide, lower is better) and, with a three-term ``logit``, the best score itself:
+    :func:`margin_logistic`; no runner-up is m = 1."""
     margin = 1.0 - best_score / runner_up_score if runner_up_score > 0 and math.isfinite(runner_up_score) else 1.0
-    return float(margin_logistic(margin, logit))
+    return float(margin_logistic(margin, logit, log_score(best_score, width_px)))
 
 
 @dataclass
@@ -686,7 +703,7 @@ def _decide(search: _Search, accepted: _Candidate | None, t_start: float) -> Loc
         stats.best_score, stats.runner_up_score = best.refined.score, runner_up.score if runner_up else None
         if params.confidence_model == "margin":
             confidence = margin_confidence(best.refined.score, runner_up.score if runner_up else np.inf,
-                                           params.margin_logit)
+                                           params.margin_logit, W)
         else:
             confidence = confidence_of(best.refined, runner_up)
     if best is None or confidence < params.abstain_below(search.fov is None):
