@@ -109,6 +109,10 @@ class LocalizeParams:
     final_refinements: int = 3  # distinct candidates refined at the end
     max_refinements: int = 16  # refinements of three-point candidates in all (each ~0.3 s)...
     max_horizon_refinements: int = 8  # ...and of far-horizon ones, each budget apart: neither crowds out the other
+    # before abstaining, the best far-horizon candidates not yet refined, this many by each ranking, are refined
+    # and the answer decided again: the 1" tile row's view 4 had its near-truth pose 9th by score, one past the
+    # budget (experiments/scale/escalation/); only a search about to abstain pays for it
+    escalate_refinements: int = 4
     give_up_sweep_px: float = 1.5  # a refinement whose first stage fits no better than this stops there
     accept_score_px: float = 0.3  # stop early once a refined pose scores this well...
     accept_agreement: float = 0.95  # ...and agrees on this share of columns
@@ -176,7 +180,7 @@ class LocalizeParams:
         and the refinement: wrong places fitted with 10-50 deg of it (held in the far-horizon
         fit too, ``HorizonSearchParams.max_swing_deg``, it lost a confident answer on the CH1 dev photos)."""
         return cls(skyline_method="select", max_hypotheses=0, final_refinements=8, max_refinements=4,
-                   max_horizon_refinements=16,
+                   max_horizon_refinements=16, escalate_refinements=0,
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=PHOTO_RUNNER_UP_M, confidence_model="margin",
                    margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,
                    min_confidence_fov_unknown=PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN,
@@ -484,7 +488,16 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
         final = params.final_refinements if accepted is None else 0
         for cand in _next_to_refine(search.candidates, final, params, budgeted=False):
             _refine(cand, search)
-    return _decide(search, accepted, t_start)
+    result = _decide(search, accepted, t_start)
+    if not result.localized and params.escalate_refinements > 0:
+        with stats.timed("escalation"):
+            horizon = [c for c in search.candidates if c.points is None and c.refined is None]
+            escalated = _best_by_either(horizon, params.escalate_refinements)
+            for cand in escalated:
+                _refine(cand, search)
+        if escalated:
+            result = _decide(search, accepted, t_start)
+    return result
 
 
 def _three_point_hypotheses(search: _Search, peak_sizes: np.ndarray) -> Hypotheses:
