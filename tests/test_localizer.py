@@ -658,6 +658,22 @@ def test_localizes_from_the_far_horizons_alone(scene, views):
     assert np.allclose(best[:6], result.pose) and best[7] == result.stats.best_score
 
 
+def test_a_search_about_to_abstain_refines_more_far_horizon_candidates_first(scene, views):
+    """``escalate_refinements``: a search that would abstain refines the best far-horizon candidates
+    it left unrefined, up to that many by each ranking, after the same search as without it; an
+    answered search does not."""
+    _, terrain, model = scene
+    photo = _photo(terrain, views.poses[1])
+    runs = {n: localize(photo, model, 2.0, 60.0, terrain=terrain,
+                        params=LocalizeParams(n_peaks=2, min_confidence=1.01, escalate_refinements=n)) for n in (0, 4)}
+    assert not runs[4].localized and "escalation" in runs[4].stats.seconds and "escalation" not in runs[0].stats.seconds
+    before = runs[0].stats.refined
+    assert 1 <= runs[4].stats.refined - before <= 8
+    assert runs[4].stats.refined_poses[:before] == runs[0].stats.refined_poses
+    answered = localize(photo, model, 2.0, 60.0, terrain=terrain, params=LocalizeParams(n_peaks=2))
+    assert answered.localized and "escalation" not in answered.stats.seconds
+
+
 def test_the_truth_refinement_diagnostic_orients_and_pins_a_camera_at_its_position(scene, views):
     """``diagnostics.truth_refine``: at a view's true position, the pan x tilt grid finds its
     orientation within the grid's half steps, and the pinned refinement fits the skyline

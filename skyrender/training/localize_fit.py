@@ -2,28 +2,27 @@
 
 ``python -m skyrender.training.localize_fit [--limit N] [--from-rows | --extend]``
 
-Each CH1 photo of the training and dev sides (``experiments/photos/split.json``) is
-localized with :meth:`LocalizeParams.for_photos` and no abstention (``min_confidence``
-0), its skyline extracted by the photo preset's extractor, the fov known. Per photo the
-margin m = 1 - best / runner-up refined score is recorded with whether the answer lies
-within 1 km of the true position; a logistic P(within 1 km) = 1 / (1 + exp(-(a + b m)))
-is fitted by maximum likelihood (scipy), its abstention threshold set
-(:func:`abstain_threshold`). ``--score-term`` adds the log best score s (px at 1024 wide):
-P = 1 / (1 + exp(-(a + b m + c ln s))). It is not the default: a right answer fits better
-than a wrong one, margin for margin, on the training photos, but how well any answer fits
-depends on the place, and judged a place at a time (:func:`leave_place_out`, printed and
-written with every fit) it answers 40 right and 5 wrong against the margin's 39 and 5; on the
-validation side, run once, it answered 3 photos 2-54 km wrong (``experiments/ch1/score-term/``). The runner-up is the best refined pose farther than D from the
-answer; D is chosen from :data:`RUNNER_UP_CHOICES_M` as the one whose fit keeps the most
-right answers above its threshold (a runner-up 1-3 km away often sees the same skyline from
-the same valley, and is no evidence against the answer; ``--runner-up-choices``, not the
-default: the 3 km it chose did not hold on the validation side). Fit, D and rows go to
-``skyrender/localizer/photo_confidence.json``, which the photo preset reads; the
-localization rows (refined poses, truth) to ``experiments/ch1/confidence-train-rows.json``,
-from which ``--from-rows`` refits without localizing. With ``--fov-unknown-rows`` (a ``real_localize --side
-train --fov unknown --no-abstain`` run's JSON; ``make fit-photo-confidence`` passes
-``experiments/ch1/fov-unknown-train/``'s) the fov-unknown mode gets a threshold of its own by the same rule
-(:func:`fov_unknown_threshold`). The validation side is never used here.
+Each CH1 photo of the training and dev sides (``experiments/photos/split.json``) is localized with
+:meth:`LocalizeParams.for_photos` and no abstention (``min_confidence`` 0), its skyline extracted by
+the photo preset's extractor, the fov known. Per photo the margin m = 1 - best / runner-up refined
+score is recorded with whether the answer lies within 1 km of the true position; a logistic P(within
+1 km) = 1 / (1 + exp(-(a + b m))) is fitted by maximum likelihood (scipy), its abstention threshold
+set (:func:`abstain_threshold`). ``--score-term`` adds the log best score s (px at 1024 wide): P = 1
+/ (1 + exp(-(a + b m + c ln s))). It is not the default: a right answer fits better than a wrong
+one, margin for margin, on the training photos, but how well any answer fits depends on the place,
+and judged a place at a time (:func:`leave_place_out`, printed and written with every fit) it
+answers 40 right and 5 wrong against the margin's 39 and 5; on the validation side, run once, it
+answered 3 photos 2-54 km wrong (``experiments/ch1/score-term/``). The runner-up is the best refined
+pose farther than D from the answer; D is chosen from :data:`RUNNER_UP_CHOICES_M` as the one whose
+fit keeps the most right answers above its threshold (a runner-up 1-3 km away often sees the same
+skyline from the same valley, and is no evidence against the answer; ``--runner-up-choices``, not
+the default: the 3 km it chose did not hold on the validation side). Fit, D and rows go to
+``skyrender/localizer/photo_confidence.json``, which the photo preset reads; the localization rows
+(refined poses, truth) to ``experiments/ch1/confidence-train-rows.json``, from which ``--from-rows``
+refits without localizing. With ``--fov-unknown-rows`` (a ``real_localize --side train --fov unknown
+--no-abstain`` run's JSON; ``make fit-photo-confidence`` passes
+``experiments/ch1/fov-unknown-train/``'s) the fov-unknown mode gets a threshold of its own by the
+same rule (:func:`fov_unknown_threshold`). The validation side is never used here.
 """
 
 from __future__ import annotations
