@@ -657,17 +657,29 @@ def _three_point_rounds(search: _Search, hyps: Hypotheses) -> _Candidate | None:
         search.candidates = [c for from_peaks in (True, False) for c in _best_by_either(
             [c for c in search.candidates if (c.points is not None) == from_peaks], 8 * params.final_refinements)]
         with search.stats.timed("refinement"):
-            # once a pose is accepted, the confirming chunks refine new three-point candidates only:
-            # the far-horizon ones are the same in every chunk and their best have been refined
-            for cand in _next_to_refine(search.candidates, params.refine_per_chunk, params, horizons=accepted is None):
+            # the three-point candidates first; once a pose is accepted (in this chunk or before), no far-horizon
+            # one: the answer is the accepted pose, and the far-horizon candidates are the same in every chunk
+            for cand in _next_to_refine(search.candidates, params.refine_per_chunk, params, horizons=False):
                 _refine(cand, search)
-        good = [c for c in search.candidates if c.refined is not None and c.refined.score <= params.accept_score_px
-                and c.refined.agreement >= params.accept_agreement]
-        if good:
-            accepted = min(good, key=lambda c: c.refined.score)
+            accepted = _accepted(search) or accepted
+            if accepted is None:
+                for cand in _next_to_refine(search.candidates, params.refine_per_chunk, params):
+                    if cand.points is None:
+                        _refine(cand, search)
+                accepted = _accepted(search)
+        if accepted is not None:
             stop_after = min(stop_after, start + (1 + params.confirm_chunks) * params.chunk)
         search.stats.rounds.append(_round_record(search, accepted is not None))
     return accepted
+
+
+def _accepted(search: _Search) -> _Candidate | None:
+    """The best refined candidate that scores ``accept_score_px`` or better and agrees on
+    ``accept_agreement`` of the columns, if any."""
+    params = search.params
+    good = [c for c in search.candidates if c.refined is not None and c.refined.score <= params.accept_score_px
+            and c.refined.agreement >= params.accept_agreement]
+    return min(good, key=lambda c: c.refined.score) if good else None
 
 
 def search_stalled(rounds: list[dict], stall_chunks: int, stall_gain: float) -> bool:
