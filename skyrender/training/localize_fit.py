@@ -21,7 +21,7 @@ the default: the 3 km it chose did not hold on the validation side). Fit, D and 
 (refined poses, truth) to ``experiments/ch1/confidence-train-rows.json``, from which ``--from-rows``
 refits without localizing. With ``--fov-unknown-rows`` (a ``real_localize --side train --fov unknown
 --no-abstain`` run's JSON; ``make fit-photo-confidence`` passes
-``experiments/ch1/fov-unknown-train/``'s) the fov-unknown mode gets a threshold of its own by the
+``experiments/ch1/fov-unknown-fast/``'s) the fov-unknown mode gets a threshold of its own by the
 same rule (:func:`fov_unknown_threshold`). The validation side is never used here.
 """
 
@@ -167,18 +167,20 @@ def main(argv=None) -> int:
                         f"on the training photos (default: {RUNNER_UP_M:.0f} m; see RUNNER_UP_CHOICES_M)")
     parser.add_argument("--score-term", action="store_true",
                         help="fit the log best score too (a probe, not the default: it did not hold on places left out)")
-    parser.add_argument("--fov-unknown-rows", default=None, metavar="JSON",
-                        help="a `real_localize --side train --fov unknown --no-abstain` run's JSON: the threshold with "
-                        "the fov unknown is set on its rows (fov_unknown_threshold)")
+    parser.add_argument("--fov-unknown-rows", default=None, metavar="JSON", nargs="+",
+                        help="`real_localize --side train --fov unknown --no-abstain` runs' JSON: the threshold with "
+                        "the fov unknown is set on all their rows together (fov_unknown_threshold)")
     args = parser.parse_args(argv)
     unknown_rows = None
     if args.fov_unknown_rows:
-        try:
-            with open(args.fov_unknown_rows) as f:
-                unknown_rows = [r for r in json.load(f)["photos"] if r["fov_mode"] == "unknown"]
-        except (OSError, ValueError, KeyError) as exc:
-            print(f"--fov-unknown-rows: cannot read {args.fov_unknown_rows}: {exc}")
-            return 2
+        unknown_rows = []
+        for path in args.fov_unknown_rows:
+            try:
+                with open(path) as f:
+                    unknown_rows += [r for r in json.load(f)["photos"] if r["fov_mode"] == "unknown"]
+            except (OSError, ValueError, KeyError) as exc:
+                print(f"--fov-unknown-rows: cannot read {path}: {exc}")
+                return 2
         if set(r["photo"] for r in unknown_rows) & set(_validation_keys()):
             print("--fov-unknown-rows: the rows hold validation photos; only training-side rows may set the threshold")
             return 2
@@ -211,7 +213,8 @@ def main(argv=None) -> int:
     if unknown_rows:
         out["min_confidence_fov_unknown"] = fov_unknown_threshold(unknown_rows, out["logit"], out["runner_up_m"],
                                                                   out["min_confidence"])
-        out["fov_unknown_rows"] = {"file": os.path.relpath(args.fov_unknown_rows, REPO), "photos": len(unknown_rows)}
+        out["fov_unknown_rows"] = {"files": [os.path.relpath(p, REPO) for p in args.fov_unknown_rows],
+                                   "photos": len(unknown_rows)}
     with open(args.out, "w") as f:
         json.dump(out, f, indent=1)
     kept, loo = out["kept_by_runner_up_m"], out["leave_place_out"]
