@@ -79,7 +79,7 @@ PHOTO_MARGIN_LOGIT = _photo_margin_logit(_FIT)
 #: the training photos (``localize_fit.abstain_threshold``): above every wrong answer there, and
 #: at least 0.5.
 PHOTO_MIN_CONFIDENCE = float(_FIT.get("min_confidence", 0.8))
-#: ... and with the fov unknown (11 focal lengths searched, margins of another kind): the same rule on
+#: ... and with the fov unknown (7 focal lengths searched, margins of another kind): the same rule on
 #: training photos localized that way, never below :data:`PHOTO_MIN_CONFIDENCE`.
 PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN = float(_FIT.get("min_confidence_fov_unknown", PHOTO_MIN_CONFIDENCE))
 #: The photo confidence's runner-up is the best refined pose farther than this (m) from the
@@ -175,16 +175,16 @@ class LocalizeParams:
         with the learned extractor alone, ``experiments/ch1/select/``). Three-point hypotheses
         are off (on CH1 their peaks are rarely DEM peaks; generating them took 10-30 s). The refined scores of right and
         wrong poses overlap (1.1-2.4 vs 1.1-4.0 px on CH1 training photos), but the
-        margin to the best pose farther away (:data:`PHOTO_RUNNER_UP_M`) separates them better, and
-        the two together best, so the confidence is a logistic of that margin and the log of the best
-        score fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`, :func:`margin_logistic`).
+        margin to the best pose farther away (:data:`PHOTO_RUNNER_UP_M`) separates them, so the
+        confidence is a logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`;
+        a term of the best score was tried and did not hold on places left out: ``localize_fit``).
         The camera roll stays within :data:`PHOTO_MAX_SWING_DEG` in the verification's alignment
         and the refinement: wrong places fitted with 10-50 deg of it (held in the far-horizon
         fit too, ``HorizonSearchParams.max_swing_deg``, it lost a confident answer on the CH1 dev photos)."""
         return cls(skyline_method="select", max_hypotheses=0, final_refinements=8, max_refinements=4,
                    max_horizon_refinements=16, escalate_refinements=0,
                    # fov unknown: 3 coarse fovs and 4 probes instead of 5 and 6 (the refinement fits the focal
-                   # length): on 20 training photos the same or better answers in 41 s instead of 52-60 s
+                   # length): on 20 training photos the same or better answers in 41.0 s instead of 64.7 s
                    # (experiments/ch1/fov-unknown-fast/)
                    fov_candidates=PHOTO_FOV_CANDIDATES, horizon_fov_step=(5.0, 2.5),
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=PHOTO_RUNNER_UP_M, confidence_model="margin",
@@ -669,9 +669,8 @@ def _three_point_rounds(search: _Search, hyps: Hypotheses) -> _Candidate | None:
                 _refine(cand, search)
             accepted = _accepted(search) or accepted
             if accepted is None:
-                for cand in _next_to_refine(search.candidates, params.refine_per_chunk, params):
-                    if cand.points is None:
-                        _refine(cand, search)
+                for cand in _next_to_refine(search.candidates, params.refine_per_chunk, params, peaks=False):
+                    _refine(cand, search)
                 accepted = _accepted(search)
         if accepted is not None:
             stop_after = min(stop_after, start + (1 + params.confirm_chunks) * params.chunk)
@@ -789,13 +788,13 @@ def _best_by_either(candidates: list[_Candidate], n: int) -> list[_Candidate]:
 
 
 def _next_to_refine(candidates: list[_Candidate], n: int, params: LocalizeParams,
-                    budgeted: bool = True, horizons: bool = True) -> list[_Candidate]:
+                    budgeted: bool = True, horizons: bool = True, peaks: bool = True) -> list[_Candidate]:
     """:func:`_best_by_either` among the candidates not refined yet, up to ``n`` of the
-    three-point and (with ``horizons``) ``n`` of the far-horizon ones, within each one's
-    refinement budget when ``budgeted``."""
+    three-point (with ``peaks``) and ``n`` of the far-horizon ones (with ``horizons``), within
+    each one's refinement budget when ``budgeted``."""
     picked = []
     sources = ((True, params.max_refinements), (False, params.max_horizon_refinements))
-    for from_peaks, limit in sources if horizons else sources[:1]:
+    for from_peaks, limit in [s for s in sources if (peaks if s[0] else horizons)]:
         mine = [c for c in candidates if (c.points is not None) == from_peaks]
         budget = max(0, min(n, limit - sum(c.refined is not None for c in mine))) if budgeted else n
         picked += _best_by_either([c for c in mine if c.refined is None], budget)

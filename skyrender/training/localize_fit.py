@@ -19,10 +19,10 @@ skyline from the same valley, and is no evidence against the answer; ``--runner-
 the default: the 3 km it chose did not hold on the validation side). Fit, D and rows go to
 ``skyrender/localizer/photo_confidence.json``, which the photo preset reads; the localization rows
 (refined poses, truth) to ``experiments/ch1/confidence-train-rows.json``, from which ``--from-rows``
-refits without localizing. With ``--fov-unknown-rows`` (a ``real_localize --side train --fov unknown
---no-abstain`` run's JSON; ``make fit-photo-confidence`` passes
-``experiments/ch1/fov-unknown-fast/``'s) the fov-unknown mode gets a threshold of its own by the
-same rule (:func:`fov_unknown_threshold`). The validation side is never used here.
+refits without localizing. With ``--fov-unknown-rows`` (``real_localize --side train --fov unknown --no-abstain``
+runs' JSON; ``make fit-photo-confidence`` passes ``experiments/ch1/fov-unknown-fast/``'s and
+``fov-unknown-train/``'s) the fov-unknown mode gets a threshold of its own by the same rule
+(:func:`fov_unknown_threshold`). The validation side is never used here.
 """
 
 from __future__ import annotations
@@ -92,7 +92,7 @@ def confidences(margin: np.ndarray, log_best: np.ndarray, logit: tuple) -> np.nd
     return np.where(ok, margin_logistic(np.nan_to_num(margin), logit, np.nan_to_num(log_best)), 0.0)
 
 
-def fit_at(margin: np.ndarray, log_best: np.ndarray, right: np.ndarray, score_term: bool = True) -> dict:
+def fit_at(margin: np.ndarray, log_best: np.ndarray, right: np.ndarray, score_term: bool = False) -> dict:
     """The logistic of ``margin`` and, with ``score_term``, the log best score ``log_best`` (NaN:
     no pose, confidence 0) for ``right`` (bool), its training confidences and abstention threshold."""
     ok = np.isfinite(margin) & np.isfinite(log_best)
@@ -145,7 +145,7 @@ def fit_confidence(rows: list[dict], choices_m=RUNNER_UP_CHOICES_M, score_term: 
 def fov_unknown_threshold(rows: list[dict], logit: tuple, runner_up_m: float, floor: float) -> float:
     """The abstention threshold with the fov unknown: :func:`abstain_threshold` (the same rule) on
     training rows localized that way, scored with the fov-known fit ``logit``; never below ``floor``
-    (the fov-known threshold). A fov-unknown search tries 11 focal lengths, and its wrong answers
+    (the fov-known threshold). A fov-unknown search tries 7 focal lengths, and its wrong answers
     can win by margins the fov-known ones never do."""
     confidence = confidences(np.array([margin_of(r, runner_up_m) for r in rows]),
                              np.array([log_best_of(r) for r in rows]), logit)
