@@ -14,6 +14,7 @@ from skyrender.benchmarks.skyline_photos import column_errors, otsu_baseline, tr
 from skyrender.cli import main
 from skyrender.datasets.real_photos import truth_from_mask, truth_from_red_line
 from skyrender.features import as_rgb8, extract_skyline, load_photo, skyline_peaks
+from skyrender.features.kmeans import kmeans_labels
 from skyrender.features.sky import _fit_gmm, clear_sky_field, hazy_ridge_logit, mixture_log_density, shadowed_snow_logit
 from skyrender.render.photo import Look, render_photo
 
@@ -170,6 +171,74 @@ def test_colour_mixture_fit_is_scikit_learns(seed):
     np.testing.assert_allclose(ours.weights, theirs.weights_, rtol=0, atol=1e-9)
     np.testing.assert_allclose(ours.means, theirs.means_, rtol=0, atol=1e-8)
     np.testing.assert_allclose(ours.precisions_cholesky, theirs.precisions_cholesky_, rtol=0, atol=1e-8)
+
+
+@pytest.mark.parametrize("case", ["clusters", "quantised", "one flat colour"])
+def test_kmeans_start_is_scikit_learns_without_importing_it(case):
+    """The mixtures' k-means start gives scikit-learn's KMeans(n_init=1) labels for the same seed —
+    on clusters of unequal size and spread, on float32-quantised pixels with many repeats, and on
+    a flat colour with fewer distinct values than clusters (empty clusters moved)."""
+    import warnings
+
+    from sklearn.cluster import KMeans
+
+    rng = np.random.default_rng(11)
+    if case == "clusters":
+        x = np.concatenate([rng.normal(rng.normal(0, 10, 6), 1 + c, (int(rng.integers(100, 3000)), 6)) for c in range(5)])
+    elif case == "quantised":
+        x = np.round(rng.normal(0, 3, (12_000, 6))).astype(np.float32).astype(np.float64)
+    else:
+        x = np.ones((3000, 6))
+        x[:10] += 1.0
+    for seed in (0, 1, 2):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # scikit-learn's own warning on the flat colour
+            theirs = KMeans(5, n_init=1, random_state=seed).fit(x).labels_
+        assert np.array_equal(kmeans_labels(x, 5, seed), theirs)
+
+
+
+def test_peak_prominences_and_widths_are_scipy_signals():
+    """The skyline peaks' prominences, bases and half-prominence widths are what scipy.signal's
+    ``peak_prominences`` and ``peak_widths`` give, to the bit — on noise, on rounded profiles with
+    ties and plateaus, on random walks — at any sample taken for an apex."""
+    import warnings
+
+    from scipy.signal import peak_prominences as scipy_prominences
+    from scipy.signal import peak_widths as scipy_widths
+
+    from skyrender.features.peaks import half_prominence_widths, peak_prominences
+
+    rng = np.random.default_rng(5)
+    for trial in range(600):
+        n = int(rng.integers(5, 300))
+        x = [rng.normal(size=n), np.round(3 * rng.normal(size=n)), np.cumsum(rng.normal(size=n)),
+             np.repeat(np.round(rng.normal(size=n // 3 + 2)), 3)[:n]][trial % 4]
+        apexes = np.unique(rng.integers(0, n, int(rng.integers(1, 12))))
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # scipy's warning on a zero prominence
+            theirs = scipy_prominences(x, apexes)
+            their_widths = scipy_widths(x, apexes, rel_height=0.5, prominence_data=theirs)[0]
+        ours = peak_prominences(x, apexes)
+        for a, b in zip(ours, theirs):
+            assert np.array_equal(a, b)
+        assert np.array_equal(half_prominence_widths(x, apexes, *ours), their_widths)
+
+
+def test_image_features_import_neither_scikit_learn_nor_scipy_stats():
+    """Extracting a skyline and its peaks in a fresh process imports neither scikit-learn (the
+    k-means start is :mod:`skyrender.features.kmeans`) nor scipy.signal / scipy.stats (the
+    prominences are :mod:`skyrender.features.peaks`'): together 1-1.5 s of every fresh command."""
+    import subprocess
+    import sys
+
+    code = ("import sys, numpy as np; from skyrender.features import extract_skyline, skyline_peaks; "
+            "v = np.arange(160); ridge = (40 + 12 * np.sin(v / 6.0)).astype(int); "
+            "img = np.where(np.arange(96)[:, None, None] < ridge[None, :, None], [[(90, 140, 220)]], [[(60, 70, 50)]]); "
+            "peaks = skyline_peaks(extract_skyline(img.astype(np.uint8)).skyline); "
+            "print(len(peaks), sorted(m for m in sys.modules if m.startswith(('sklearn', 'scipy.stats', 'scipy.signal'))))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split(" ", 1)
+    assert int(out[0]) >= 3 and out[1].strip() == "[]"
 
 
 def test_colour_mixture_of_one_flat_colour_fits_quietly():

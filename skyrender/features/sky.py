@@ -4,8 +4,8 @@ Pixel features: CIE Lab colour, local texture (standard deviation of
 lightness in a 7 x 7 window, and gradient magnitude) and image row (sky
 colour changes with elevation angle). The
 probability combines a prior on the row with colour-texture models learned
-*from the photo itself*: Gaussian mixtures (scikit-learn's fit, each EM step
-vectorised over the components: :func:`_fit_gmm`) fitted to pixels
+*from the photo itself*: Gaussian mixtures (scikit-learn's fit from its k-means start,
+each EM step vectorised over the components: :func:`_fit_gmm`) fitted to pixels
 labelled sky and terrain by the previous boundary estimate (the first round
 seeds them from the top and bottom of the frame). Self-training adapts to
 what a fixed classifier cannot know: this photo's sky, haze and snow.
@@ -68,21 +68,19 @@ def _fit_gmm(samples: np.ndarray, components: int, seed: int) -> Mixture:
     scikit-learn's ``GaussianMixture(covariance_type="full", reg_covar=GMM_REG_COVAR,
     max_iter=GMM_MAX_ITER, random_state=seed)`` fits (its k-means start, then the same EM
     steps and stop, to ~1e-10), with each EM step over all components in a few matrix
-    products instead of several passes per component.
+    products instead of several passes per component. The k-means start is scikit-learn's too
+    (:mod:`.kmeans`), without importing it.
     """
-    import warnings
-
-    from sklearn.cluster import KMeans
-    from sklearn.exceptions import ConvergenceWarning
     from threadpoolctl import threadpool_limits
+
+    from .kmeans import kmeans_labels
 
     x = np.asarray(samples, np.float64)
     n = int(min(components, max(1, len(x) // 50)))
     # one thread: the fit's matrices are a few thousand by 6, and BLAS / OpenMP threads on them
     # cost more than they share (a fit 3x faster on 2 cores; the same fit to the bit)
-    with threadpool_limits(1), warnings.catch_warnings():
-        warnings.simplefilter("ignore", ConvergenceWarning)  # fewer distinct colours than clusters (a flat render's sky)
-        labels = KMeans(n_clusters=n, n_init=1, random_state=seed).fit(x).labels_
+    with threadpool_limits(1):
+        labels = kmeans_labels(x, n, seed)
         centre = x.mean(axis=0)
         x = x - centre  # fitted centred (covariances from outer products), the means moved back at the end
         outer = (x[:, :, None] * x[:, None, :]).reshape(len(x), -1)
