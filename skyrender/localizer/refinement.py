@@ -323,13 +323,15 @@ def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, heig
                 image_skyline: np.ndarray, weights: np.ndarray, *, fit_focal: bool = False,
                 f_px: float | None = None, points: np.ndarray | None = None,
                 params: ScoreParams = ScoreParams(), give_up_px: float = np.inf,
-                refine: RefineParams = RefineParams()) -> Refined:
+                refine: RefineParams = RefineParams(), focal_range: float = np.inf) -> Refined:
     """Refine one pose (6,) against the photo's skyline (W,): resection sweep (with
     three matched ``points``), local search, then least squares. When the sweep's best
     score exceeds ``give_up_px`` the candidate is wrong (on the benchmark views right
     ones swept to <= 0.27 px, wrong ones >= 0.7 px) and its best swept pose is returned;
     without points, the same when the local search's first level scores worse (right
-    far-horizon candidates 0.39-0.67 px there on view 1, wrong ones 2.75-3.87 on view 5)."""
+    far-horizon candidates 0.39-0.67 px there on view 1, wrong ones 2.75-3.87 on view 5).
+    With ``fit_focal`` the last stage fits the focal length too, within ``focal_range`` (a fraction)
+    of the candidate's own."""
     f0 = intrinsics.f_px if f_px is None else float(f_px)
     start = np.asarray(pose, np.float64)
     seeds, renders, widest, swept = [start], 0, np.inf, np.nan
@@ -352,7 +354,7 @@ def refine_pose(terrain: Terrain, pose: np.ndarray, intrinsics: Intrinsics, heig
     last = [0, 1, 2, 3, 4] + ([5] if fit_focal else []) + ([6] if refine.fit_height_m > 0 else [])
     for free in ([2, 3, 4], last):
         q, n = _least_squares(terrain, q, free, intrinsics, image_skyline, weights, refine.max_nfev, params,
-                              max_height=height + refine.fit_height_m)
+                              max_height=height + refine.fit_height_m, focal_range=(f0, focal_range))
         stages.append(q)
         renders += n
     return _best_stage(terrain, stages, height, intrinsics, image_skyline, weights, params, renders, pose)
@@ -386,17 +388,22 @@ def _pose_of(dem, qs: np.ndarray, intrinsics: Intrinsics) -> tuple[np.ndarray, n
 
 def _least_squares(terrain: Terrain, q0: np.ndarray, free: list[int], intrinsics: Intrinsics,
                    image_skyline: np.ndarray, weights: np.ndarray, max_nfev: int,
-                   params: ScoreParams, max_height: float = np.inf) -> tuple[np.ndarray, int]:
+                   params: ScoreParams, max_height: float = np.inf,
+                   focal_range: tuple[float, float] = (1.0, np.inf)) -> tuple[np.ndarray, int]:
     """least_squares over the ``free`` entries of q = (x, y, pan, tilt, swing, f, h); a free
-    height h stays within [0, ``max_height``] m."""
+    height h stays within [0, ``max_height``] m, a free focal length within ``focal_range`` = (f,
+    fraction): f (1 -+ fraction)."""
     sqrt_w = np.sqrt(np.asarray(weights, np.float64))
     all_steps = np.r_[STEP_XY_M, STEP_XY_M, STEP_DEG, STEP_DEG, STEP_DEG, STEP_F_REL * q0[5], STEP_H_M]
     steps = all_steps[free]
     free_ = np.array(free)
-    lower = np.where(free_ == 6, 0.0, np.where(free_ == 4, -params.max_swing_deg, -np.inf))
-    upper = np.where(free_ == 6, max(max_height, q0[6] + 1e-6), np.where(free_ == 4, params.max_swing_deg, np.inf))
+    f_mid, f_frac = focal_range
+    lower = np.select([free_ == 6, free_ == 4, free_ == 5], [0.0, -params.max_swing_deg, f_mid * (1 - f_frac)], -np.inf)
+    upper = np.select([free_ == 6, free_ == 4, free_ == 5],
+                      [max(max_height, q0[6] + 1e-6), params.max_swing_deg, f_mid * (1 + f_frac)], np.inf)
     q0 = q0.copy()
     q0[4] = np.clip(q0[4], -params.max_swing_deg, params.max_swing_deg)  # a start outside the bound moves onto it
+    q0[5] = np.clip(q0[5], f_mid * (1 - f_frac), f_mid * (1 + f_frac))
     counter = [0]
 
     def full(p: np.ndarray) -> np.ndarray:
