@@ -289,3 +289,19 @@ def test_bench_real_retables_a_run_of_one_fov_mode(tmp_path):
     text = (tmp_path / "bench-real-validation-t.txt").read_text()
     assert "unknown fov: 2 photos; within 100 m 0 %, 250 m 50 %, 1 km 100 %" in text
     assert "\nknown fov" not in text
+
+
+def test_a_benchmark_run_is_summarised_place_by_place():
+    """Each run's table says, per place of the split, how many photos ended within 250 m and 1 km,
+    withheld answers included: a change that helps one place only shows as such."""
+    from skyrender.benchmarks.real_localize import by_place, table
+
+    rows = [{"photo": "a1", "error_m": 100.0}, {"photo": "a2", "error_m": 600.0}, {"photo": "b1", "withheld_error_m": 200.0},
+            {"photo": "b2", "error_m": 5e4}, {"photo": "c1"}]
+    places = by_place(rows, {"a1": "ch1/place11", "a2": "ch1/place11", "b1": "ch1/place03", "b2": "ch1/place03"})
+    assert places == {"?": {"photos": 1, "within_250m": 0, "within_1000m": 0},
+                      "ch1/place03": {"photos": 2, "within_250m": 1, "within_1000m": 1},
+                      "ch1/place11": {"photos": 2, "within_250m": 1, "within_1000m": 2}}
+    text = table({"photos": [], "summary": {}, "by_place": {"known": places}})
+    assert text.endswith("known fov by place (within 250 m / 1 km of photos, answered or withheld): "
+                         "? 0 / 0 of 1, place03 1 / 1 of 2, place11 1 / 2 of 2")
