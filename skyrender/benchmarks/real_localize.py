@@ -318,7 +318,8 @@ def main(argv=None) -> int:
             report["overrides"] = {"set": json.loads(args.set) if args.set else None, "no_abstain": args.no_abstain}
     modes = [m for m in args.fov if any(r["fov_mode"] == m for r in report["photos"])]  # a run of one mode: that one
     report["summary"] = {m: summary([r for r in report["photos"] if r["fov_mode"] == m]) for m in modes}
-    report["by_place"] = {m: by_place([r for r in report["photos"] if r["fov_mode"] == m], split_places()) for m in modes}
+    place_of = split_places()
+    report["by_place"] = {m: by_place([r for r in report["photos"] if r["fov_mode"] == m], place_of) for m in modes}
     text = table(report)
     print(text)
     os.makedirs(args.out, exist_ok=True)

@@ -64,18 +64,18 @@ def peak_prominences(x: np.ndarray, apexes: np.ndarray) -> tuple[np.ndarray, np.
     the prominence is the apex's height over the higher of the two bases."""
     x = np.asarray(x, dtype=np.float64)
     n = len(x)
-    out = np.zeros(len(apexes)), np.zeros(len(apexes), np.intp), np.zeros(len(apexes), np.intp)
+    prominence = np.zeros(len(apexes))
+    left_base, right_base = np.zeros(len(apexes), np.intp), np.zeros(len(apexes), np.intp)
     for i, k in enumerate(apexes):
         higher = x > x[k]
         left_higher = np.flatnonzero(higher[:k])
         lo = left_higher[-1] + 1 if len(left_higher) else 0
         right_higher = np.flatnonzero(higher[k + 1:])
         hi = k + right_higher[0] if len(right_higher) else n - 1  # the last sample not above the apex
-        left = lo + len(x[lo:k + 1]) - 1 - int(np.argmin(x[lo:k + 1][::-1]))  # the minimum nearest the apex
-        right = k + int(np.argmin(x[k:hi + 1]))
-        out[0][i] = x[k] - max(x[left], x[right])
-        out[1][i], out[2][i] = left, right
-    return out
+        left_base[i] = k - int(np.argmin(x[lo:k + 1][::-1]))  # the minimum nearest the apex
+        right_base[i] = k + int(np.argmin(x[k:hi + 1]))
+        prominence[i] = x[k] - max(x[left_base[i]], x[right_base[i]])
+    return prominence, left_base, right_base
 
 
 def half_prominence_widths(x: np.ndarray, apexes: np.ndarray, prominence: np.ndarray, left_base: np.ndarray,
