@@ -55,9 +55,10 @@ def places_of(items) -> tuple[dict[str, str], dict[str, tuple[float, float]]]:
     return place_of, {place: tuple(np.mean(p, axis=0)) for place, p in positions.items()}
 
 
-def load_place(lat: float, lon: float):
-    """(dem, terrain, photo-preset model, window) of a place centred at (lat, lon): the SRTM3
-    mosaic within :func:`place_window`, its model built once and cached."""
+def load_place(lat: float, lon: float, model_params=None):
+    """(dem, terrain, model, window) of a place centred at (lat, lon): the SRTM3 mosaic
+    within :func:`place_window`, its model (``model_params``, default the photo preset's)
+    built once and cached."""
     from ..dem import load_dem
     from ..model import ModelParams, cached_model
     from ..render import Terrain
@@ -65,12 +66,20 @@ def load_place(lat: float, lon: float):
     window = place_window(lat, lon)
     dem = load_dem(tiles_around(lat, lon, DEM_DIR), bounds=window)
     terrain = Terrain(dem)
-    return dem, terrain, cached_model(dem, ModelParams.for_photos(), terrain=terrain), window
+    return dem, terrain, cached_model(dem, model_params or ModelParams.for_photos(), terrain=terrain), window
+
+
+def model_overrides(text: str | None):
+    """The photo preset's ModelParams with the JSON ``text``'s fields set (a probe), or None."""
+    from ..model import ModelParams
+
+    return ModelParams.from_dict(json.loads(text), ModelParams.for_photos()) if text else None
 
 
 def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown_every: int = 1,
-        done: dict | None = None, on_row=None) -> list[dict]:
-    """Localize each photo (``params``: LocalizeParams, default the photo preset); rows as in
+        done: dict | None = None, on_row=None, model_params=None) -> list[dict]:
+    """Localize each photo (``params``: LocalizeParams, default the photo preset; ``model_params``:
+    ModelParams, default the photo preset's); rows as in
     the module doc. The fov-unknown mode runs on every ``unknown_every``-th photo only (it
     searches several focal lengths, so it takes several times longer). ``done`` maps
     (photo, fov mode) to rows of an interrupted run, kept as they are (that place's model is
@@ -91,7 +100,7 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
         place = place_of[it.key]
         if place not in loaded:
             t = time.perf_counter()
-            dem, terrain, model, window = load_place(*centres[place])
+            dem, terrain, model, window = load_place(*centres[place], model_params)
             loaded.clear()  # one place's model in memory at a time
             loaded[place] = (dem, terrain, model, time.perf_counter() - t, window)
         dem, terrain, model, model_seconds, window = loaded[place]
@@ -248,6 +257,8 @@ def main(argv=None) -> int:
     parser.add_argument("--photos", nargs="+", default=None, help="these photos of the side only (keys, e.g. ch1/IMG_4922_01024)")
     parser.add_argument("--set", default=None, metavar="JSON",
                         help='overrides of the photo preset, e.g. \'{"refine": {"fit_height_m": 50}}\' (a probe)')
+    parser.add_argument("--model-set", default=None, metavar="JSON",
+                        help="overrides of the photo preset's model parameters (a probe; its own cached models)")
     parser.add_argument("--no-abstain", action="store_true", help="min_confidence 0: every photo answered")
     parser.add_argument("--tag", default="", help="output files bench-real-<side>-<tag>.*")
     parser.add_argument("--retable", action="store_true", help="rewrite the text table from the run's JSON")
@@ -271,6 +282,11 @@ def main(argv=None) -> int:
         except ValueError as exc:
             print(f"--set: {exc}")
             return 2
+    try:
+        model_params = model_overrides(args.model_set)
+    except ValueError as exc:
+        print(f"--model-set: {exc}")
+        return 2
     if args.no_abstain:
         params = LocalizeParams.from_dict({"min_confidence": 0.0, "min_confidence_fov_unknown": 0.0}, params)
     name = f"bench-real-{args.side}{'-' + args.tag if args.tag else ''}"
@@ -312,10 +328,12 @@ def main(argv=None) -> int:
                 f.write(json.dumps(row) + "\n")
 
         commit = git_commit()  # the code that runs, not what the tree holds when the run ends
-        rows = run(items, args.fov, params=params, unknown_every=max(1, args.unknown_every), done=done, on_row=append_row)
+        rows = run(items, args.fov, params=params, unknown_every=max(1, args.unknown_every), done=done, on_row=append_row,
+                   model_params=model_params)
         report = {"commit": commit, "cpus": os.cpu_count(), "side": args.side, "photos": rows}
-        if args.set or args.no_abstain:
-            report["overrides"] = {"set": json.loads(args.set) if args.set else None, "no_abstain": args.no_abstain}
+        if args.set or args.no_abstain or args.model_set:
+            report["overrides"] = {"set": json.loads(args.set) if args.set else None, "no_abstain": args.no_abstain,
+                                   "model_set": json.loads(args.model_set) if args.model_set else None}
     modes = [m for m in args.fov if any(r["fov_mode"] == m for r in report["photos"])]  # a run of one mode: that one
     report["summary"] = {m: summary([r for r in report["photos"] if r["fov_mode"] == m]) for m in modes}
     place_of = split_places()

@@ -39,30 +39,25 @@ def first_rank(order: np.ndarray, distance: np.ndarray, radius: float) -> int | 
     return int(hit[0]) + 1 if len(hit) else None
 
 
-def probe(items, true_skyline: bool = False, progress: bool = True, params=None, rerank: int = 0) -> list[dict]:
-    from ..benchmarks.real_localize import DEM_DIR, place_window, places_of, tiles_around
+def probe(items, true_skyline: bool = False, progress: bool = True, params=None, rerank: int = 0,
+          model_params=None) -> list[dict]:
+    from ..benchmarks.real_localize import load_place, places_of
     from ..camera import Intrinsics
-    from ..dem import load_dem
     from ..features import extract_skyline, load_photo
     from ..localizer import LocalizeParams
     from ..localizer.horizon_search import horizon_poses
     from ..localizer.pipeline import column_weights, rerank_far_horizon
     from ..localizer.verification import verify_poses
-    from ..model import ModelParams, cached_model
-    from ..render import Terrain
 
     params = params or LocalizeParams.for_photos()
     place_of, centres = places_of(items)
     rows, loaded = [], {}
     for n, it in enumerate(items):
-        lat, lon = centres[place_of[it.key]]
-        window = place_window(lat, lon)
-        if window not in loaded:
+        place = place_of[it.key]
+        if place not in loaded:
             loaded.clear()
-            dem = load_dem(tiles_around(lat, lon, DEM_DIR), bounds=window)
-            terrain = Terrain(dem)
-            loaded[window] = (dem, terrain, cached_model(dem, ModelParams.for_photos(), terrain=terrain))
-        dem, terrain, model = loaded[window]
+            loaded[place] = load_place(*centres[place], model_params)[:3]
+        dem, terrain, model = loaded[place]
         t = time.perf_counter()
         image = load_photo(it.image_path)
         H, W = image.shape[:2]
@@ -124,6 +119,8 @@ def main(argv=None) -> int:
     parser.add_argument("--limit", type=int, default=0, help="at most N photos, spread over the side")
     parser.add_argument("--true-skyline", action="store_true", help="the photo's true skyline instead of the extracted one")
     parser.add_argument("--set", default=None, metavar="JSON", help="overrides of the photo preset (a probe)")
+    parser.add_argument("--model-set", default=None, metavar="JSON",
+                        help="overrides of the photo preset's model parameters (a probe; its own cached models)")
     parser.add_argument("--rerank", type=int, default=0, metavar="K",
                         help="probe: also rank the best K by score and by cost after a local position search")
     parser.add_argument("--tag", default="", help="output file candidates-<side>[-true]-<tag>.json")
@@ -140,7 +137,9 @@ def main(argv=None) -> int:
     items = [it for it in items_on_side(args.side) if it.key.startswith("ch1/")]
     if args.limit:
         items = items[:: max(1, len(items) // args.limit)][: args.limit]
-    rows = probe(items, args.true_skyline, params=params, rerank=args.rerank)
+    from ..benchmarks.real_localize import model_overrides
+
+    rows = probe(items, args.true_skyline, params=params, rerank=args.rerank, model_params=model_overrides(args.model_set))
     s = summary(rows)
     for key, v in s.items():
         print(f"within {key} m: a pose for {v['with_a_pose']} of {v['photos']} photos; among the refined "
@@ -150,7 +149,8 @@ def main(argv=None) -> int:
     tag = f"{args.side}{'-true' if args.true_skyline else ''}{'-' + args.tag if args.tag else ''}"
     os.makedirs(args.out, exist_ok=True)
     with open(os.path.join(args.out, f"candidates-{tag}.json"), "w") as f:
-        json.dump({"commit": git_commit(), "side": args.side, "true_skyline": args.true_skyline, "set": args.set, "summary": s,
+        json.dump({"commit": git_commit(), "side": args.side, "true_skyline": args.true_skyline, "set": args.set,
+                   "model_set": args.model_set, "summary": s,
                    "photos": rows}, f, indent=1)
     return 0
 
