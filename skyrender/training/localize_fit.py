@@ -35,7 +35,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import minimize
 
-from ..benchmarks.real_localize import log_best_of, logit_text, margin_of, places_of, run
+from ..benchmarks.real_localize import log_best_of, logit_text, margin_of, model_overrides, places_of, run
 from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
 from ..evaluate import git_commit
 from ..localizer import LocalizeParams
@@ -162,6 +162,8 @@ def main(argv=None) -> int:
     source.add_argument("--from-rows", action="store_true", help="refit from the rows of an earlier run, localizing nothing")
     source.add_argument("--extend", action="store_true",
                         help="keep the rows already in --rows and localize only the photos they lack (same localizer code)")
+    parser.add_argument("--model-set", default=None, metavar="JSON",
+                        help="overrides of the photo preset's model parameters (a probe: write --rows and --out elsewhere)")
     parser.add_argument("--runner-up-choices", action="store_true",
                         help=f"choose the runner-up distance among {', '.join(f'{d:.0f}' for d in RUNNER_UP_CHOICES_M)} m "
                         f"on the training photos (default: {RUNNER_UP_M:.0f} m; see RUNNER_UP_CHOICES_M)")
@@ -205,7 +207,13 @@ def main(argv=None) -> int:
                 saved = json.load(f)
             done = {(r["photo"], r["fov_mode"]): r for r in saved["rows"]}
             rows_commit = f"{saved.get('commit')} ({len(done)} rows) + {rows_commit}"
-        rows = run(items, ["known"], params=replace(LocalizeParams.for_photos(), min_confidence=0.0), done=done)
+        try:
+            model_params = model_overrides(args.model_set)
+        except ValueError as exc:
+            print(f"--model-set: {exc}")
+            return 2
+        rows = run(items, ["known"], params=replace(LocalizeParams.for_photos(), min_confidence=0.0), done=done,
+                   model_params=model_params)
         with open(args.rows, "w") as f:
             json.dump({"commit": rows_commit, "rows": rows}, f)
     choices = RUNNER_UP_CHOICES_M if args.runner_up_choices else (RUNNER_UP_M,)
