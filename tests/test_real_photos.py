@@ -121,6 +121,24 @@ def test_photo_models_are_cached_apart_from_render_models():
     assert photo.startswith(dem.fingerprint() + "-") and photo == model_cache_key(dem, ModelParams.for_photos())
 
 
+def test_a_probe_of_model_parameters_is_cached_apart_and_refuses_unknown_fields(capsys):
+    """``--model-set`` of bench-real, the candidates diagnostic and localize_fit: the photo preset's model
+    with some fields set, under a cache key of its own; an unknown field is a one-line refusal (status 2)."""
+    from skyrender.benchmarks.real_localize import main, model_overrides
+    from skyrender.dem import load_dem
+    from skyrender.model import ModelParams, model_cache_key
+
+    assert model_overrides(None) is None
+    probe = model_overrides('{"horizons": {"spacing": 125.0}}')
+    assert probe.horizons.spacing == 125.0
+    assert probe.horizons.near_m == ModelParams.for_photos().horizons.near_m  # the rest is the photo preset's
+    dem = load_dem("builtin:jacksboro")
+    assert model_cache_key(dem, probe) != model_cache_key(dem, ModelParams.for_photos())
+    data_path("photos", "ch1")
+    assert main(["--side", "dev", "--photos", "none", "--model-set", '{"horizons": {"spacin": 1}}']) == 2
+    assert "spacin" in capsys.readouterr().out
+
+
 def _write_geotiff(path, z, west, north, step):
     import rasterio
     from affine import Affine
