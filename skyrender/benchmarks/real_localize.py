@@ -76,10 +76,20 @@ def model_overrides(text: str | None):
     return ModelParams.from_dict(json.loads(text), ModelParams.for_photos()) if text else None
 
 
+def true_extraction(item, height: int):
+    """The photo's true skyline as an extraction: every column trusted, P(sky) 1 above it and 0 below."""
+    from ..features.skyline import ExtractedSkyline
+
+    sky = item.truth_skyline()
+    probability = (np.arange(height)[:, None] < np.nan_to_num(sky, nan=height)[None, :]).astype(np.float32)
+    return ExtractedSkyline(sky, np.ones(len(sky)), probability)
+
+
 def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown_every: int = 1,
-        done: dict | None = None, on_row=None, model_params=None) -> list[dict]:
+        done: dict | None = None, on_row=None, model_params=None, true_skyline: bool = False) -> list[dict]:
     """Localize each photo (``params``: LocalizeParams, default the photo preset; ``model_params``:
-    ModelParams, default the photo preset's); rows as in
+    ModelParams, default the photo preset's; ``true_skyline``: from the photo's true skyline, every
+    column trusted, instead of the extracted one: what a perfect extractor would give); rows as in
     the module doc. The fov-unknown mode runs on every ``unknown_every``-th photo only (it
     searches several focal lengths, so it takes several times longer). ``done`` maps
     (photo, fov mode) to rows of an interrupted run, kept as they are (that place's model is
@@ -111,7 +121,7 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
                 continue
             t = time.perf_counter()
             image = load_photo(it.image_path)
-            skyline = extract_skyline(image, params.skyline_params())
+            skyline = true_extraction(it, image.shape[0]) if true_skyline else extract_skyline(image, params.skyline_params())
             fov = float(np.degrees(2 * np.arctan(image.shape[1] / (2 * it.focal_px)))) if mode == "known" else None
             result = localize(image, model, 2.0, fov, terrain=terrain, skyline=skyline, params=params)
             seconds = time.perf_counter() - t
@@ -259,6 +269,8 @@ def main(argv=None) -> int:
                         help='overrides of the photo preset, e.g. \'{"refine": {"fit_height_m": 50}}\' (a probe)')
     parser.add_argument("--model-set", default=None, metavar="JSON",
                         help="overrides of the photo preset's model parameters (a probe; its own cached models)")
+    parser.add_argument("--true-skyline", action="store_true",
+                        help="a diagnostic: localize from each photo's true skyline (its mask), not the extracted one")
     parser.add_argument("--no-abstain", action="store_true", help="min_confidence 0: every photo answered")
     parser.add_argument("--tag", default="", help="output files bench-real-<side>-<tag>.*")
     parser.add_argument("--retable", action="store_true", help="rewrite the text table from the run's JSON")
@@ -329,11 +341,12 @@ def main(argv=None) -> int:
 
         commit = git_commit()  # the code that runs, not what the tree holds when the run ends
         rows = run(items, args.fov, params=params, unknown_every=max(1, args.unknown_every), done=done, on_row=append_row,
-                   model_params=model_params)
+                   model_params=model_params, true_skyline=args.true_skyline)
         report = {"commit": commit, "cpus": os.cpu_count(), "side": args.side, "photos": rows}
-        if args.set or args.no_abstain or args.model_set:
+        if args.set or args.no_abstain or args.model_set or args.true_skyline:
             report["overrides"] = {"set": json.loads(args.set) if args.set else None, "no_abstain": args.no_abstain,
-                                   "model_set": json.loads(args.model_set) if args.model_set else None}
+                                   "model_set": json.loads(args.model_set) if args.model_set else None,
+                                   "true_skyline": args.true_skyline}
     modes = [m for m in args.fov if any(r["fov_mode"] == m for r in report["photos"])]  # a run of one mode: that one
     report["summary"] = {m: summary([r for r in report["photos"] if r["fov_mode"] == m]) for m in modes}
     place_of = split_places()
