@@ -134,6 +134,16 @@ class DEM:
         out = np.where(s >= t, lower, upper)
         return np.where(inside, out, np.nan)
 
+    def slope_deg(self, x, y) -> np.ndarray:
+        """Slope (deg from level) of the ground at (x, y), from central differences of
+        :meth:`ground` one cell either side along x and along y; NaN where those lie off
+        the DEM. Vectorized like :meth:`ground`."""
+        dx, dy = self.cell_size
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        gx = (self.ground(x + dx, y) - self.ground(x - dx, y)) / (2 * dx)
+        gy = (self.ground(x, y + dy) - self.ground(x, y - dy)) / (2 * dy)
+        return np.degrees(np.arctan(np.hypot(gx, gy)))
+
     # --- geo-reference ---------------------------------------------------------
     @cached_property
     def _to_lonlat(self):

@@ -45,7 +45,7 @@ def probe(items, true_skyline: bool = False, progress: bool = True, params=None,
     from ..camera import Intrinsics
     from ..features import extract_skyline, load_photo
     from ..localizer import LocalizeParams
-    from ..localizer.horizon_search import horizon_poses
+    from ..localizer.horizon_search import horizon_poses, standable_centres
     from ..localizer.pipeline import column_weights, rerank_far_horizon
     from ..localizer.verification import verify_poses
 
@@ -67,7 +67,8 @@ def probe(items, true_skyline: bool = False, progress: bool = True, params=None,
             extracted = extract_skyline(image, params.skyline_params())
             sky, weights = extracted.skyline, column_weights(extracted.confidence, params.confidence_power)
         k = Intrinsics(W, H, it.focal_px, W / 2, H / 2)
-        poses, cost = horizon_poses(model.horizons, sky, weights, k, dem, 2.0, params.horizon)
+        poses, cost = horizon_poses(model.horizons, sky, weights, k, dem, 2.0, params.horizon,
+                                    centres=standable_centres(model.horizons, dem, params.max_ground_slope_deg))
         score, trusted = verify_poses(terrain, poses, k, sky, weights, params.verify_stride, params=params.score)
         tx, ty = (float(v) for v in dem.from_lonlat(it.lon, it.lat))
         distance = np.hypot(poses[:, 0] - tx, poses[:, 1] - ty)

@@ -42,7 +42,7 @@ from ..features.skyline import SkylineParams
 from ..model import Model
 from ..render import Terrain, render_skylines
 from .constraints import in_image_geometry, interfeature_visibility, prior_in_view, segments_in_sky, skyline_limit
-from .horizon_search import HorizonSearchParams, centre_indices, horizon_poses
+from .horizon_search import HorizonSearchParams, centre_indices, horizon_poses, standable_centres
 from .hypotheses import Hypotheses, generate_hypotheses
 from .pose_solver import solve_poses
 from .refinement import Refined, RefineParams, WeakSweepParams, local_rescore, refine_pose, weak_axis_sweep
@@ -143,6 +143,8 @@ class LocalizeParams:
     horizon_fov_step: tuple = (5.0, 2.5, 1.25)  # unknown fov: probes around the best fov of the far-horizon search
     # ... which search only the horizon centres of the poses kept at the fovs tried before (False: every centre)
     fov_probes_on_found: bool = True
+    # far-horizon search: only horizon centres whose ground slopes at most this (deg; inf: every centre)
+    max_ground_slope_deg: float = math.inf
     # far-horizon poses: the best this many by each ranking are moved to the best of a rerank_grid^2
     # grid +-rerank_half_m (m) around them, that score their first ranking (0: off; a probe, not in
     # the photo preset: experiments/ch1/README.md)
@@ -553,8 +555,9 @@ def _far_horizon_candidates(search: _Search) -> None:
         verified[fov_i] = (k_i.f_px, poses, score, trusted)
         return _best_of(score)
 
+    standable = standable_centres(search.model.horizons, search.model.dem, params.max_ground_slope_deg)
     for fov_i in search.fovs:
-        verify_at(fov_i)
+        verify_at(fov_i, standable)
     if search.fov is None:
         probe = verify_at
         if params.fov_probes_on_found:
