@@ -141,6 +141,31 @@ def test_ground_is_the_sw_ne_split_triangle_mesh():
     assert np.isnan(dem.ground(4.9, 10)) and np.isnan(dem.ground(10, 15.1))
 
 
+def test_slope_is_the_ground_plane_angle_and_nan_off_the_dem():
+    """DEM.slope_deg on planes: 20 deg rising east, 35 deg falling south-west, level."""
+    x, y = np.meshgrid(np.arange(30) * 30.0, np.arange(20)[::-1] * 30.0)  # cell centres, row 0 north
+    transform = Affine(30, 0, -15, 0, -30, 19 * 30.0 + 15)
+    for z, want in ((np.tan(np.radians(20)) * x, 20.0), (np.tan(np.radians(35)) * (x + y) / np.sqrt(2), 35.0),
+                    (np.full(x.shape, 812.0), 0.0)):
+        dem = DEM(z, transform, None, "plane")
+        np.testing.assert_allclose(dem.slope_deg([100.0, 400.0, 731.5], [90.0, 300.0, 500.0]), want, atol=1e-9)
+    assert np.isnan(dem.slope_deg(5.0, 300.0))  # one cell west of it lies off the DEM
+
+
+def test_the_far_horizon_search_keeps_only_centres_on_ground_a_person_stands_on():
+    from skyrender.localizer.horizon_search import standable_centres
+    from skyrender.model import Horizons
+
+    x, y = np.meshgrid(np.arange(40) * 30.0, np.arange(20)[::-1] * 30.0)
+    z = np.where(x < 600, 100.0, 100.0 + np.tan(np.radians(40)) * (x - 600))  # level, then a 40 deg slope
+    dem = DEM(z, Affine(30, 0, -15, 0, -30, 19 * 30.0 + 15), None, "step")
+    xs = np.array([150.0, 450.0, 900.0, 1050.0])
+    horizons = Horizons(np.c_[xs, np.full(4, 300.0), dem.ground(xs, 300.0)], np.zeros((4, 360), np.float32), 1.0)
+    assert standable_centres(horizons, dem, np.inf) is None  # no bound: every centre
+    assert standable_centres(horizons, dem, 30.0).tolist() == [0, 1]
+    assert standable_centres(horizons, dem, 45.0).tolist() == [0, 1, 2, 3]
+
+
 def test_ground_matches_cell_values_at_centres(view_dem):
     dem = view_dem
     rng = np.random.default_rng(1)
