@@ -129,7 +129,8 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
                    "seconds": seconds, "model_seconds": model_seconds, "window": window, "width": image.shape[1],
                    "stage_seconds": result.stats.to_dict()["seconds"], "best_score": result.stats.best_score,
                    "runner_up_score": result.stats.runner_up_score, "truth_xy": [tx, ty],
-                   "refined_poses": [list(r) for r in result.stats.refined_poses]}
+                   "refined_poses": [list(r) for r in result.stats.refined_poses],
+                   "refined_slopes": list(result.stats.refined_slopes)}
             if result.localized:
                 row["error_m"] = float(position_errors(result.pose, np.array([tx, ty]))[0])
                 row["fov"] = result.fov
@@ -174,13 +175,30 @@ def by_place(rows: list[dict], place_of: dict[str, str]) -> dict[str, dict]:
     return dict(sorted(out.items()))
 
 
+def refined_of(row: dict, max_slope_deg: float | None = None) -> np.ndarray:
+    """The row's refined poses (K, 8: x, y, z, pan, tilt, swing, f_px, score) the answer is chosen
+    among: those whose ground slopes at most ``max_slope_deg`` (default the photo preset's
+    :data:`~skyrender.localizer.pipeline.PHOTO_MAX_ANSWER_SLOPE_DEG`; all where none does, or where the
+    row keeps no ``refined_slopes``: rows of runs before the bound)."""
+    from ..localizer.pipeline import PHOTO_MAX_ANSWER_SLOPE_DEG
+
+    poses = np.asarray(row.get("refined_poses") or [], np.float64).reshape(-1, 8)
+    slopes = np.asarray(row.get("refined_slopes") or [], np.float64)
+    bound = PHOTO_MAX_ANSWER_SLOPE_DEG if max_slope_deg is None else max_slope_deg
+    if len(slopes) == len(poses) and len(poses):
+        standable = ~(slopes > bound)
+        if standable.any():
+            return poses[standable]
+    return poses
+
+
 def margin_of(row: dict, runner_up_m: float = 1000.0) -> float:
     """1 - best / runner-up refined score, the runner-up the best refined pose farther than
-    ``runner_up_m`` (m) from the answer (from the row's ``refined_poses``; a row without them
+    ``runner_up_m`` (m) from the answer (among the row's :func:`refined_of`; a row without them
     keeps the run's own runner-up score); 1 without a runner-up, NaN without a pose."""
     from ..localizer.pipeline import runner_up_index
 
-    poses = np.asarray(row.get("refined_poses") or [], np.float64).reshape(-1, 8)
+    poses = refined_of(row)
     if len(poses):
         best = int(np.argmin(poses[:, 7]))
         i = runner_up_index(poses[:, :2], poses[:, 7], best, runner_up_m)
@@ -197,7 +215,7 @@ def log_best_of(row: dict) -> float:
     without a pose."""
     from ..localizer.pipeline import SCORE_REFERENCE_WIDTH_PX, log_score
 
-    poses = np.asarray(row.get("refined_poses") or [], np.float64).reshape(-1, 8)
+    poses = refined_of(row)
     best = poses[:, 7].min() if len(poses) else row.get("best_score")
     if best is None:
         return float("nan")

@@ -88,6 +88,11 @@ PHOTO_RUNNER_UP_M = float(_FIT.get("runner_up_m", 1000.0))
 #: Real photographs stand nearly upright (hand-held, EXIF orientation applied): the camera roll
 #: the photo preset's alignment and least squares may fit (deg; CH1 training oracle fits: -5.4..3.0).
 PHOTO_MAX_SWING_DEG = 8.0
+#: People photograph from ground they stand on: the photo preset answers with, and measures its margin
+#: against, refined poses whose ground slopes at most this (deg, :meth:`DEM.slope_deg`; all of them where
+#: none does). The 73 CH1 training-side cameras stand on 0-27 deg of SRTM3 slope, while the refined wrong
+#: places' median is 20 deg and a quarter exceed 29 deg (``experiments/ch1/standable/``).
+PHOTO_MAX_ANSWER_SLOPE_DEG = 35.0
 
 
 @dataclass(frozen=True)
@@ -143,6 +148,9 @@ class LocalizeParams:
     horizon_fov_step: tuple = (5.0, 2.5, 1.25)  # unknown fov: probes around the best fov of the far-horizon search
     # ... which search only the horizon centres of the poses kept at the fovs tried before (False: every centre)
     fov_probes_on_found: bool = True
+    # the answer and its runner-up are taken among refined poses whose ground slopes at most this (deg;
+    # all of them where none does; inf: no bound)
+    max_answer_slope_deg: float = math.inf
     # far-horizon search: only horizon centres whose ground slopes at most this (deg; inf: every centre)
     max_ground_slope_deg: float = math.inf
     # far-horizon poses: the best this many by each ranking are moved to the best of a rerank_grid^2
@@ -196,7 +204,7 @@ class LocalizeParams:
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=PHOTO_RUNNER_UP_M, confidence_model="margin",
                    margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,
                    min_confidence_fov_unknown=PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN,
-                   score=ScoreParams(max_swing_deg=PHOTO_MAX_SWING_DEG),
+                   score=ScoreParams(max_swing_deg=PHOTO_MAX_SWING_DEG), max_answer_slope_deg=PHOTO_MAX_ANSWER_SLOPE_DEG,
                    horizon=HorizonSearchParams(tilts=(-10.0, 0.0, 10.0, 20.0, 30.0), terms=2, rank_by_cost=True))
 
     def skyline_params(self) -> SkylineParams:
@@ -246,6 +254,7 @@ class LocalizeStats:
     # every refined candidate, in the order refined: [x, y, z, pan, tilt, swing, f_px, refined score
     # (px)]; the places an analyst would check next, and what the diagnostics compare with the truth
     refined_poses: list = field(default_factory=list)
+    refined_slopes: list = field(default_factory=list)  # the ground's slope (deg) under each refined pose
 
     def add_time(self, stage: str, seconds: float) -> None:
         self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
@@ -270,7 +279,7 @@ class LocalizeStats:
                 "best_score": self.best_score, "runner_up_score": self.runner_up_score,
                 "seconds": {k: round(v, 4) for k, v in self.seconds.items()},
                 "peak_mb": {k: round(v, 1) for k, v in self.peak_mb.items()}, "rounds": list(self.rounds),
-                "refined_poses": [list(r) for r in self.refined_poses],
+                "refined_poses": [list(r) for r in self.refined_poses], "refined_slopes": list(self.refined_slopes),
                 "hypotheses_per_second": self.evaluated / solve if solve > 0 else 0.0}
 
 
@@ -726,6 +735,9 @@ def _decide(search: _Search, accepted: _Candidate | None, t_start: float) -> Loc
     params, stats, model = search.params, search.stats, search.model
     W, H = search.width, search.img_height
     done = sorted([c for c in search.candidates if c.refined is not None], key=lambda c: c.refined.score)
+    if accepted is None and math.isfinite(params.max_answer_slope_deg):
+        standable = [c for c in done if not model.dem.slope_deg(*c.refined.pose[:2]) > params.max_answer_slope_deg]
+        done = standable or done
     best = accepted or (done[0] if done else None)
     confidence = 0.0
     if best is not None:
@@ -831,3 +843,4 @@ def _refine(cand: _Candidate, search: _Search) -> None:
     search.stats.refined += 1
     r = cand.refined
     search.stats.refined_poses.append(tuple(float(v) for v in (*r.pose, r.f_px, r.score)))
+    search.stats.refined_slopes.append(float(search.model.dem.slope_deg(r.pose[0], r.pose[1])))
