@@ -555,20 +555,21 @@ def test_a_rescore_takes_the_runner_up_from_the_rows_refined_poses():
 
 
 def test_the_answer_and_its_runner_up_stand_on_ground_a_person_stands_on():
-    """refined_of / margin_of with the rows' refined_slopes: a pose on a 50 deg cliff is neither the
-    answer nor the runner-up; where every pose is on a cliff all count; a row of a run before the
-    bound (no slopes) is read as it was."""
+    """refined_of / margin_of with the rows' refined_slopes and the bound their run used: a pose on a
+    50 deg cliff is neither the answer nor the runner-up; where every pose is on a cliff all count; a
+    row of a run without the bound (or without slopes) is read as it was."""
     from skyrender.benchmarks.real_localize import log_best_of, margin_of, refined_of
 
     poses = [[0, 0, 2, 0, 0, 0, 800, 0.9],  # the best score, on a cliff
              [3000, 0, 2, 0, 0, 0, 800, 1.0], [9000, 0, 2, 0, 0, 0, 800, 1.1],  # a cliff, then level ground
              [0, 5000, 2, 0, 0, 0, 800, 2.0]]
-    row = {"refined_poses": poses, "refined_slopes": [50.0, 12.0, 48.0, 3.0]}
+    row = {"refined_poses": poses, "refined_slopes": [50.0, 12.0, 48.0, 3.0], "max_answer_slope_deg": 35.0}
     assert refined_of(row, 35.0)[:, 7].tolist() == [1.0, 2.0]
     assert margin_of(row, 1000.0) == pytest.approx(1 - 1.0 / 2.0)  # not 1 - 0.9 / 1.0
     assert log_best_of(row) == pytest.approx(np.log(1.0))
     assert len(refined_of(row, 60.0)) == 4 and len(refined_of(row, 2.0)) == 4  # no bound / every pose over it
     assert margin_of({"refined_poses": poses}, 1000.0) == pytest.approx(1 - 0.9 / 1.0)
+    assert margin_of({**row, "max_answer_slope_deg": np.inf}, 1000.0) == pytest.approx(1 - 0.9 / 1.0)
 
 
 def test_the_photo_confidence_fit_takes_the_runner_up_distance_that_keeps_most_right_answers():

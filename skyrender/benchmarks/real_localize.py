@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import time
 
@@ -131,6 +132,8 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
                    "runner_up_score": result.stats.runner_up_score, "truth_xy": [tx, ty],
                    "refined_poses": [list(r) for r in result.stats.refined_poses],
                    "refined_slopes": list(result.stats.refined_slopes)}
+            if math.isfinite(params.max_answer_slope_deg):  # the answer was chosen among poses on such ground
+                row["max_answer_slope_deg"] = params.max_answer_slope_deg
             if result.localized:
                 row["error_m"] = float(position_errors(result.pose, np.array([tx, ty]))[0])
                 row["fov"] = result.fov
@@ -177,15 +180,13 @@ def by_place(rows: list[dict], place_of: dict[str, str]) -> dict[str, dict]:
 
 def refined_of(row: dict, max_slope_deg: float | None = None) -> np.ndarray:
     """The row's refined poses (K, 8: x, y, z, pan, tilt, swing, f_px, score) the answer is chosen
-    among: those whose ground slopes at most ``max_slope_deg`` (default the photo preset's
-    :data:`~skyrender.localizer.pipeline.PHOTO_MAX_ANSWER_SLOPE_DEG`; all where none does, or where the
-    row keeps no ``refined_slopes``: rows of runs before the bound)."""
-    from ..localizer.pipeline import PHOTO_MAX_ANSWER_SLOPE_DEG
-
+    among: those whose ground slopes at most ``max_slope_deg`` (default the row's own
+    ``max_answer_slope_deg``, ``LocalizeParams.max_answer_slope_deg`` of its run; none: every pose),
+    by the row's ``refined_slopes``; all where none does or the row keeps no slopes."""
     poses = np.asarray(row.get("refined_poses") or [], np.float64).reshape(-1, 8)
     slopes = np.asarray(row.get("refined_slopes") or [], np.float64)
-    bound = PHOTO_MAX_ANSWER_SLOPE_DEG if max_slope_deg is None else max_slope_deg
-    if len(slopes) == len(poses) and len(poses):
+    bound = row.get("max_answer_slope_deg", np.inf) if max_slope_deg is None else max_slope_deg
+    if np.isfinite(bound) and len(slopes) == len(poses) and len(poses):
         standable = ~(slopes > bound)
         if standable.any():
             return poses[standable]
