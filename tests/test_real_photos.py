@@ -277,6 +277,22 @@ def test_a_ch1_validation_photo_is_localized_within_a_kilometre():
     assert np.hypot(result.pose[0] - x, result.pose[1] - y) < 1000.0
 
 
+def test_the_true_skyline_diagnostic_hands_the_localizer_the_mask_as_an_extraction():
+    """``bench-real --true-skyline``: the photo's true skyline, every column trusted, P(sky) 1 above it."""
+    from skyrender.benchmarks.real_localize import true_extraction
+
+    data_path("photos", "ch1")
+    item = next(i for i in photo_items(str(DATA / "photos")) if i.key.startswith("ch1/"))
+    truth = item.truth_skyline()
+    H = int(np.nanmax(truth)) + 40
+    found = true_extraction(item, H)
+    np.testing.assert_array_equal(found.skyline, truth)
+    assert (found.confidence == 1).all() and found.sky_probability.shape == (H, len(truth))
+    c = int(np.flatnonzero(np.isfinite(truth))[0])
+    column = found.sky_probability[:, c]
+    assert column[: int(np.ceil(truth[c]))].all() and not column[int(np.ceil(truth[c])):].any()
+
+
 def test_column_weights_and_the_recall_rank_of_the_diagnostic():
     """Pure helpers of the real-photo path: column weights from the per-column confidence
     (floored at 0.05, raised to a power) and the diagnostic's rank of the first pose near
