@@ -127,20 +127,24 @@ def main(argv=None) -> int:
     parser.add_argument("--tag", default="", help="output file candidates-<side>[-true]-<tag>.json")
     parser.add_argument("--out", default=os.path.join(REPO, "experiments", "ch1"))
     args = parser.parse_args(argv)
+    from ..benchmarks.real_localize import model_overrides
     from ..localizer import LocalizeParams
 
     params = LocalizeParams.for_photos()
-    if args.set:
-        params = LocalizeParams.from_dict(json.loads(args.set), params)
+    try:
+        if args.set:
+            params = LocalizeParams.from_dict(json.loads(args.set), params)
+        model_params = model_overrides(args.model_set)
+    except ValueError as exc:  # bad JSON or an unknown field: one line, status 2
+        print(f"--set / --model-set: {exc}")
+        return 2
     if not os.path.isdir(DEFAULT_PHOTOS):
         print(f"no photos at {DEFAULT_PHOTOS}")
         return 2
     items = [it for it in items_on_side(args.side) if it.key.startswith("ch1/")]
     if args.limit:
         items = items[:: max(1, len(items) // args.limit)][: args.limit]
-    from ..benchmarks.real_localize import model_overrides
-
-    rows = probe(items, args.true_skyline, params=params, rerank=args.rerank, model_params=model_overrides(args.model_set))
+    rows = probe(items, args.true_skyline, params=params, rerank=args.rerank, model_params=model_params)
     s = summary(rows)
     for key, v in s.items():
         print(f"within {key} m: a pose for {v['with_a_pose']} of {v['photos']} photos; among the refined "
