@@ -1,6 +1,5 @@
 """Per photo of a side: how much shape its extracted skyline has (relief: 95th - 5th percentile row over the width;
 tv: total variation over the width).  python experiments/ch1/confidence-features/skyline_shape.py SIDE OUT.json"""
-"""Per photo: how much shape its extracted skyline has (relief and total variation, in units of the width)."""
 import json, sys
 import numpy as np
 from skyrender.datasets.real_photos import items_on_side
