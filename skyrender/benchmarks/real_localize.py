@@ -182,15 +182,14 @@ def refined_of(row: dict, max_slope_deg: float | None = None) -> np.ndarray:
     """The row's refined poses (K, 8: x, y, z, pan, tilt, swing, f_px, score) the answer is chosen
     among: those whose ground slopes at most ``max_slope_deg`` (default the row's own
     ``max_answer_slope_deg``, ``LocalizeParams.max_answer_slope_deg`` of its run; none: every pose),
-    by the row's ``refined_slopes``; all where none does or the row keeps no slopes."""
+    by the row's ``refined_slopes`` (:func:`~skyrender.localizer.pipeline.standable_mask`, as the
+    localizer chooses); every pose where the row keeps no slopes."""
+    from ..localizer.pipeline import standable_mask
+
     poses = np.asarray(row.get("refined_poses") or [], np.float64).reshape(-1, 8)
-    slopes = np.asarray(row.get("refined_slopes") or [], np.float64)
+    slopes = row.get("refined_slopes") or []
     bound = row.get("max_answer_slope_deg", np.inf) if max_slope_deg is None else max_slope_deg
-    if np.isfinite(bound) and len(slopes) == len(poses) and len(poses):
-        standable = ~(slopes > bound)
-        if standable.any():
-            return poses[standable]
-    return poses
+    return poses[standable_mask(slopes, bound)] if len(slopes) == len(poses) and len(poses) else poses
 
 
 def margin_of(row: dict, runner_up_m: float = 1000.0) -> float:

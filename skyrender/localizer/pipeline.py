@@ -320,6 +320,16 @@ class _Candidate:
     trusted: float
     points: np.ndarray | None  # (3, 3) the hypothesis' matched feature points (None: from the horizons)
     refined: Refined | None = None
+    ground_slope: float = math.nan  # deg, under the refined pose (DEM.slope_deg)
+
+
+def standable_mask(slopes, max_slope_deg: float) -> np.ndarray:
+    """(K,) bool: which of K poses whose ground slopes ``slopes`` (deg; NaN: off the DEM, kept)
+    the answer and its runner-up are chosen among: those at most ``max_slope_deg``; all of them
+    where none is, or where the bound is infinite (``LocalizeParams.max_answer_slope_deg``)."""
+    slopes = np.asarray(slopes, np.float64)
+    keep = ~(slopes > max_slope_deg)
+    return keep if keep.any() else np.ones(len(slopes), bool)
 
 
 def peak_rss_mb() -> float:
@@ -733,9 +743,9 @@ def _decide(search: _Search, accepted: _Candidate | None, t_start: float) -> Loc
     params, stats, model = search.params, search.stats, search.model
     W, H = search.width, search.img_height
     done = sorted([c for c in search.candidates if c.refined is not None], key=lambda c: c.refined.score)
-    if accepted is None and math.isfinite(params.max_answer_slope_deg):
-        standable = [c for c in done if not model.dem.slope_deg(*c.refined.pose[:2]) > params.max_answer_slope_deg]
-        done = standable or done
+    if accepted is None and done:
+        keep = standable_mask([c.ground_slope for c in done], params.max_answer_slope_deg)
+        done = [c for c, k in zip(done, keep) if k]
     best = accepted or (done[0] if done else None)
     confidence = 0.0
     if best is not None:
@@ -840,5 +850,6 @@ def _refine(cand: _Candidate, search: _Search) -> None:
                                focal_range=params.given_focal_range if search.fov is not None else math.inf)
     search.stats.refined += 1
     r = cand.refined
+    cand.ground_slope = float(search.model.dem.slope_deg(r.pose[0], r.pose[1]))
     search.stats.refined_poses.append(tuple(float(v) for v in (*r.pose, r.f_px, r.score)))
-    search.stats.refined_slopes.append(float(search.model.dem.slope_deg(r.pose[0], r.pose[1])))
+    search.stats.refined_slopes.append(cand.ground_slope)
