@@ -120,6 +120,14 @@ class LocalizeParams:
     # photo's world its peaks do too, and the resection sweep held to them ends beside the place (the 1" tile
     # row's view 6: 68 m off at 1.58 px held to its points, 7 m at 0.48 px free of them; experiments/scale/)
     free_refinements: int = 4
+    # if it still abstains, every far-horizon pose is moved to the best of a rescore_grid^2 grid +-rescore_half_m (m)
+    # around it, scored on every rescore_stride-th column (local_rescore), and the best this many, distinct from the
+    # poses refined already, are refined: a pose a few hundred metres from a camera under a near ridge scores like
+    # a wrong place where it lies (the 1" tile row's view 3: 259 m off, 329th by score; moved, 131 m off and 1st)
+    rescore_refinements: int = 6
+    rescore_grid: int = 7
+    rescore_half_m: float = 300.0
+    rescore_stride: int = 32
     give_up_sweep_px: float = 1.5  # a refinement whose first stage fits no better than this stops there
     accept_score_px: float = 0.3  # stop early once a refined pose scores this well...
     accept_agreement: float = 0.95  # ...and agrees on this share of columns
@@ -199,7 +207,7 @@ class LocalizeParams:
         and the refinement: wrong places fitted with 10-50 deg of it (held in the far-horizon
         fit too, ``HorizonSearchParams.max_swing_deg``, it lost a confident answer on the CH1 dev photos)."""
         return cls(skyline_method="select", max_hypotheses=0, final_refinements=8, max_refinements=4,
-                   max_horizon_refinements=16, escalate_refinements=0, free_refinements=0,
+                   max_horizon_refinements=16, escalate_refinements=0, free_refinements=0, rescore_refinements=0,
                    # fov unknown: 3 coarse fovs and 4 probes instead of 5 and 6 (the refinement fits the focal
                    # length): on 20 training photos the same or better answers in 41.0 s instead of 64.7 s
                    # (experiments/ch1/fov-unknown-fast/)
@@ -463,6 +471,9 @@ class _Search:
     candidates: list = field(default_factory=list)
     # the first chunks' verified three-point poses, for the weak-axis sweep: (poses, points, image peaks, fov)
     swept_pool: list = field(default_factory=list)
+    # the far-horizon poses of the fovs whose best joined the candidates, for the rescore before abstaining:
+    # (f_px, fov, poses)
+    horizon_pool: list = field(default_factory=list)
     solver: object = solve_poses  # solve_poses, or a skyrender.scale.SplitSolver spreading it over a cluster
 
     def intrinsics(self, fov: float) -> Intrinsics:
@@ -523,7 +534,18 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
         for cand in _next_to_refine(search.candidates, final, params, budgeted=False):
             _refine(cand, search)
     result = _decide(search, accepted, t_start)
-    if not result.localized and (params.escalate_refinements > 0 or params.free_refinements > 0):
+    return result if result.localized else _before_abstaining(search, accepted, t_start, result)
+
+
+def _before_abstaining(search: _Search, accepted: _Candidate | None, t_start: float,
+                       result: LocalizationResult) -> LocalizationResult:
+    """Stage 4d, for a search about to abstain: more candidates refined in two rounds, the answer
+    decided again after each. First the best far-horizon candidates left unrefined
+    (``escalate_refinements`` by each ranking) and the best refined three-point ones again free of
+    their matched points (``free_refinements``); then, if it still abstains, the best far-horizon
+    poses once moved to the best of a grid around them (``rescore_refinements``)."""
+    params, stats = search.params, search.stats
+    if params.escalate_refinements > 0 or params.free_refinements > 0:
         with stats.timed("escalation"):
             horizon = [c for c in search.candidates if c.points is None and c.refined is None]
             escalated = _best_by_either(horizon, params.escalate_refinements)
@@ -536,7 +558,38 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
                 _refine_free_of_points(cand, search)
         if escalated or freed:
             result = _decide(search, accepted, t_start)
-    return result
+    if result.localized or params.rescore_refinements <= 0 or not search.horizon_pool:
+        return result
+    with stats.timed("rescore"):
+        rescored = _rescored_horizon_candidates(search)
+        for cand in rescored:
+            _refine(cand, search)
+    return _decide(search, accepted, t_start) if rescored else result
+
+
+def _rescored_horizon_candidates(search: _Search) -> list[_Candidate]:
+    """Every kept far-horizon pose moved to the best of a ``rescore_grid``² grid ±``rescore_half_m``
+    around it (:func:`local_rescore`, every ``rescore_stride``-th column); the best
+    ``rescore_refinements`` of each fov's, distinct from the poses refined so far and from each
+    other, join the candidates (and are returned)."""
+    params = search.params
+    taken = [c.refined.pose for c in search.candidates if c.refined is not None]
+    added = []
+    for f_px, fov_i, poses in search.horizon_pool:
+        moved, score = local_rescore(search.terrain, poses, search.intrinsics(fov_i), search.height, search.sky,
+                                     search.weights, params.rescore_half_m, params.rescore_grid, params.rescore_stride,
+                                     params.score)
+        search.stats.verified += len(poses) * params.rescore_grid ** 2
+        n = 0
+        for j in np.argsort(score, kind="stable"):
+            if n == params.rescore_refinements or not np.isfinite(score[j]):
+                break
+            if _distinct(taken, moved[j], params.same_pose_m):
+                taken.append(moved[j])
+                added.append(_Candidate(moved[j], f_px, float(score[j]), float(score[j]), None))
+                n += 1
+    search.candidates.extend(added)
+    return added
 
 
 def _three_point_hypotheses(search: _Search, peak_sizes: np.ndarray) -> Hypotheses:
@@ -600,6 +653,7 @@ def _far_horizon_candidates(search: _Search) -> None:
             with stats.timed("rerank"):
                 poses, score, trusted = _rerank(search, poses, score, trusted, fov_i)
         _add_candidates(search.candidates, poses, score, trusted, f_px, None, params)
+        search.horizon_pool.append((f_px, fov_i, poses))
 
 
 def _rerank(search: _Search, poses: np.ndarray, score: np.ndarray, second: np.ndarray,
