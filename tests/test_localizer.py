@@ -684,7 +684,7 @@ def test_a_search_about_to_abstain_refines_more_far_horizon_candidates_first(sce
     photo = _photo(terrain, views.poses[1])
     runs = {n: localize(photo, model, 2.0, 60.0, terrain=terrain,
                         params=LocalizeParams(n_peaks=2, min_confidence=1.01, escalate_refinements=n,
-                                              free_refinements=0)) for n in (0, 4)}
+                                              rescore_refinements=0)) for n in (0, 4)}
     assert not runs[4].localized and "escalation" in runs[4].stats.seconds and "escalation" not in runs[0].stats.seconds
     before = runs[0].stats.refined
     assert 1 <= runs[4].stats.refined - before <= 8
@@ -693,27 +693,24 @@ def test_a_search_about_to_abstain_refines_more_far_horizon_candidates_first(sce
     assert answered.localized and "escalation" not in answered.stats.seconds
 
 
-def test_a_search_about_to_abstain_refines_its_best_three_point_poses_again_free_of_their_points(scene, views):
-    """``free_refinements``: a search that would abstain refines its best refined three-point
-    candidates that scored worse than ``accept_score_px`` again without their matched points, at
-    most that many, after the same search as without it, keeping each candidate's better
-    refinement; an answered search does not."""
+def test_a_search_still_about_to_abstain_refines_far_horizon_poses_moved_to_the_best_of_a_grid(scene, views):
+    """``rescore_refinements``: a search still about to abstain after its escalation moves every kept
+    far-horizon pose to the best of a grid around it and refines the best of them, distinct from the
+    poses refined before: a view that a starved far-horizon search (one refinement) abstains on is
+    then localized, after the same search as without it; an answered search does not pay for it."""
     _, terrain, model = scene
-    photo = _photo(terrain, views.poses[1])
-    runs = {n: localize(photo, model, 2.0, 60.0, terrain=terrain,
-                        params=LocalizeParams(min_confidence=1.01, escalate_refinements=0, free_refinements=n))
-            for n in (0, 4)}
-    assert not runs[4].localized and "escalation" in runs[4].stats.seconds and "escalation" not in runs[0].stats.seconds
+    starved = dict(n_peaks=2, max_horizon_refinements=1, final_refinements=1, escalate_refinements=0)
+    photo = _photo(terrain, views.poses[3])
+    runs = {n: localize(photo, model, 2.0, 60.0, terrain=terrain, params=LocalizeParams(**starved, rescore_refinements=n))
+            for n in (0, 6)}
+    assert not runs[0].localized and "rescore" not in runs[0].stats.seconds
     before = runs[0].stats.refined
-    assert runs[4].stats.refined_poses[:before] == runs[0].stats.refined_poses
-    freed = np.array(runs[4].stats.refined_poses[before:])
-    assert 1 <= len(freed) <= 4
-    held = np.array(runs[0].stats.refined_poses)[:, 7]
-    assert np.all(freed[:, 7] > 0) and runs[4].stats.best_score <= runs[0].stats.best_score
-    # the loosest held three-point refinement scored worse than the acceptance bound: why they were freed
-    assert held.max() > LocalizeParams().accept_score_px
-    answered = localize(photo, model, 2.0, 60.0, terrain=terrain, params=LocalizeParams())
-    assert answered.localized and "escalation" not in answered.stats.seconds
+    assert runs[6].stats.refined_poses[:before] == runs[0].stats.refined_poses
+    assert 1 <= runs[6].stats.refined - before <= 6 and "rescore" in runs[6].stats.seconds
+    _assert_close(runs[6], views.poses[3])
+    answered = localize(_photo(terrain, views.poses[0]), model, 2.0, 60.0, terrain=terrain,
+                        params=LocalizeParams(**starved, rescore_refinements=6))
+    assert answered.localized and "rescore" not in answered.stats.seconds
 
 
 def test_the_truth_refinement_diagnostic_orients_and_pins_a_camera_at_its_position(scene, views):

@@ -115,11 +115,6 @@ class LocalizeParams:
     # and the answer decided again: the 1" tile row's view 4 had its near-truth pose 9th by score, one past the
     # budget (experiments/scale/escalation/); only a search about to abstain pays for it
     escalate_refinements: int = 4
-    # ... and the best this many refined three-point candidates that scored worse than accept_score_px are
-    # refined again free of their matched points, the better of the two kept: where the DEM differs from the
-    # photo's world its peaks do too, and the resection sweep held to them ends beside the place (the 1" tile
-    # row's view 6: 68 m off at 1.58 px held to its points, 7 m at 0.48 px free of them; experiments/scale/)
-    free_refinements: int = 4
     # if it still abstains, every far-horizon pose is moved to the best of a rescore_grid^2 grid +-rescore_half_m (m)
     # around it, scored on every rescore_stride-th column (local_rescore), and the best this many, distinct from the
     # poses refined already, are refined: a pose a few hundred metres from a camera under a near ridge scores like
@@ -207,7 +202,7 @@ class LocalizeParams:
         and the refinement: wrong places fitted with 10-50 deg of it (held in the far-horizon
         fit too, ``HorizonSearchParams.max_swing_deg``, it lost a confident answer on the CH1 dev photos)."""
         return cls(skyline_method="select", max_hypotheses=0, final_refinements=8, max_refinements=4,
-                   max_horizon_refinements=16, escalate_refinements=0, free_refinements=0, rescore_refinements=0,
+                   max_horizon_refinements=16, escalate_refinements=0, rescore_refinements=0,
                    # fov unknown: 3 coarse fovs and 4 probes instead of 5 and 6 (the refinement fits the focal
                    # length): on 20 training photos the same or better answers in 41.0 s instead of 64.7 s
                    # (experiments/ch1/fov-unknown-fast/)
@@ -541,22 +536,16 @@ def _before_abstaining(search: _Search, accepted: _Candidate | None, t_start: fl
                        result: LocalizationResult) -> LocalizationResult:
     """Stage 4d, for a search about to abstain: more candidates refined in two rounds, the answer
     decided again after each. First the best far-horizon candidates left unrefined
-    (``escalate_refinements`` by each ranking) and the best refined three-point ones again free of
-    their matched points (``free_refinements``); then, if it still abstains, the best far-horizon
+    (``escalate_refinements`` by each ranking); then, if it still abstains, the best far-horizon
     poses once moved to the best of a grid around them (``rescore_refinements``)."""
     params, stats = search.params, search.stats
-    if params.escalate_refinements > 0 or params.free_refinements > 0:
+    if params.escalate_refinements > 0:
         with stats.timed("escalation"):
             horizon = [c for c in search.candidates if c.points is None and c.refined is None]
             escalated = _best_by_either(horizon, params.escalate_refinements)
             for cand in escalated:
                 _refine(cand, search)
-            loose = sorted((c for c in search.candidates if c.points is not None and c.refined is not None
-                            and c.refined.score > params.accept_score_px), key=lambda c: c.refined.score)
-            freed = loose[: params.free_refinements]
-            for cand in freed:
-                _refine_free_of_points(cand, search)
-        if escalated or freed:
+        if escalated:
             result = _decide(search, accepted, t_start)
     if result.localized or params.rescore_refinements <= 0 or not search.horizon_pool:
         return result
@@ -905,27 +894,15 @@ def _dedupe(poses: np.ndarray, cell_m: float = 50.0, cell_deg: float = 1.0) -> n
     return np.sort(first)
 
 
-def _refine(cand: _Candidate, search: _Search, points: bool = True) -> None:
-    """Refine one candidate (:func:`refine_pose`) from the first fov tried, with its own focal length
-    (and its matched feature points, if any, unless ``points`` is False)."""
+def _refine(cand: _Candidate, search: _Search) -> None:
+    """Refine one candidate (:func:`refine_pose`) from the first fov tried, with its own focal length."""
     params = search.params
     cand.refined = refine_pose(search.terrain, cand.pose, search.intrinsics(search.fovs[0]), search.height, search.sky,
-                               search.weights, fit_focal=search.fit_focal, f_px=cand.f_px,
-                               points=cand.points if points else None, params=params.score,
-                               give_up_px=params.give_up_sweep_px, refine=params.refine,
+                               search.weights, fit_focal=search.fit_focal, f_px=cand.f_px, points=cand.points,
+                               params=params.score, give_up_px=params.give_up_sweep_px, refine=params.refine,
                                focal_range=params.given_focal_range if search.fov is not None else math.inf)
     search.stats.refined += 1
     r = cand.refined
     cand.ground_slope = float(search.model.dem.slope_deg(r.pose[0], r.pose[1]))
     search.stats.refined_poses.append(tuple(float(v) for v in (*r.pose, r.f_px, r.score)))
     search.stats.refined_slopes.append(cand.ground_slope)
-
-
-def _refine_free_of_points(cand: _Candidate, search: _Search) -> None:
-    """Refine a refined three-point candidate again from its hypothesis pose without its matched
-    points (the local search's wide levels instead of the resection sweep), keeping the better
-    of the two refinements (``LocalizeParams.free_refinements``)."""
-    held, slope = cand.refined, cand.ground_slope
-    _refine(cand, search, points=False)
-    if held.score <= cand.refined.score:
-        cand.refined, cand.ground_slope = held, slope
