@@ -137,6 +137,9 @@ def test_a_probe_of_model_parameters_is_cached_apart_and_refuses_unknown_fields(
     data_path("photos", "ch1")
     assert main(["--side", "dev", "--photos", "none", "--model-set", '{"horizons": {"spacin": 1}}']) == 2
     assert "spacin" in capsys.readouterr().out
+    # a photo key that names no photo of the side is refused too, not run as an empty benchmark
+    assert main(["--side", "dev", "--photos", "IMG_4922_01024"]) == 2
+    assert "IMG_4922_01024" in capsys.readouterr().out
 
 
 def _write_geotiff(path, z, west, north, step):

@@ -299,10 +299,6 @@ def main(argv=None) -> int:
         print(f"no photos at {DEFAULT_PHOTOS}")
         return 2
     items = [it for it in items_on_side(args.side) if it.key.startswith("ch1/")]
-    if args.photos:
-        items = [it for it in items if it.key in set(args.photos)]
-    if args.limit:
-        items = items[:: max(1, len(items) // args.limit)][: args.limit]
     from ..localizer import LocalizeParams
 
     params = LocalizeParams.for_photos()
@@ -317,6 +313,15 @@ def main(argv=None) -> int:
     except ValueError as exc:
         print(f"--model-set: {exc}")
         return 2
+    if args.photos:
+        unknown = sorted(set(args.photos) - {it.key for it in items})
+        if unknown:  # a mistyped key would otherwise run nothing and say nothing
+            print(f"--photos: not CH1 photos of the {args.side} side: {' '.join(unknown)} (keys look like "
+                  "ch1/IMG_4922_01024)")
+            return 2
+        items = [it for it in items if it.key in set(args.photos)]
+    if args.limit:
+        items = items[:: max(1, len(items) // args.limit)][: args.limit]
     if args.no_abstain:
         params = LocalizeParams.from_dict({"min_confidence": 0.0, "min_confidence_fov_unknown": 0.0}, params)
     name = f"bench-real-{args.side}{'-' + args.tag if args.tag else ''}"
