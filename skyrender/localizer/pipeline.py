@@ -18,7 +18,9 @@ far-horizon search also picks the focal lengths worth refining.
 :func:`_three_point_hypotheses`, :func:`_far_horizon_candidates`,
 :func:`_three_point_rounds` (each chunk through :func:`_screen_chunk`: solver,
 constraints, verification; then refinement), the final refinements and
-:func:`_decide`. Real photographs use :meth:`LocalizeParams.for_photos`: far
+:func:`_decide`; a search about to abstain goes on in :func:`_before_abstaining` (more
+far-horizon candidates refined, then every far-horizon pose moved to the best of a grid
+around it and the best of those refined) and decides again. Real photographs use :meth:`LocalizeParams.for_photos`: far
 horizons only, and a confidence from the margin to the runner-up.
 """
 
