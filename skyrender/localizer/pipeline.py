@@ -52,8 +52,11 @@ from .verification import ScoreParams, verify_poses
 
 #: Focal lengths tried when the field of view is unknown (horizontal fov, degrees).
 FOV_CANDIDATES = (30.0, 40.0, 50.0, 60.0, 70.0)
-#: ... and the photo preset's (CH1's horizontal fovs: 10.6-67.4 deg, half of them 50.5-57.0)
-PHOTO_FOV_CANDIDATES = (35.0, 50.0, 65.0)
+#: ... and the photo preset's: a ratio of 1.5 apart, from telephoto to wide angle (a 200 mm lens on a
+#: 35 mm frame sees 10.3 deg, a 24 mm one 73.7 deg; CH1's photos 10.6-67.4 deg), each probe
+#: (:data:`PHOTO_FOV_STEPS`) halving the ratio
+PHOTO_FOV_CANDIDATES = (13.0, 19.5, 29.25, 43.875, 65.8125)
+PHOTO_FOV_STEPS = (1.5 ** 0.5 - 1.0, 1.5 ** 0.25 - 1.0)
 #: The photo confidence P(within 1 km) = logistic(a + b * margin): (a, b) fitted on the CH1
 #: training side by ``python -m skyrender.training.localize_fit``, which writes this file.
 PHOTO_CONFIDENCE_FILE = os.path.join(os.path.dirname(__file__), "photo_confidence.json")
@@ -151,6 +154,9 @@ class LocalizeParams:
     horizon: HorizonSearchParams = field(default_factory=HorizonSearchParams)
     fov_candidates: tuple = FOV_CANDIDATES  # unknown fov: horizontal fovs (deg) tried first
     horizon_fov_step: tuple = (5.0, 2.5, 1.25)  # unknown fov: probes around the best fov of the far-horizon search
+    # ... those steps as ratios (probes at best * (1 + s) and best / (1 + s), the range tried widened by the
+    # first): equal steps of a focal length's ratio, from telephoto to wide angle (False: steps in deg)
+    fov_step_ratio: bool = False
     # ... which search only the horizon centres of the poses kept at the fovs tried before (False: every centre)
     fov_probes_on_found: bool = True
     # the answer and its runner-up are taken among refined poses whose ground slopes at most this (deg;
@@ -205,10 +211,9 @@ class LocalizeParams:
         fit too, ``HorizonSearchParams.max_swing_deg``, it lost a confident answer on the CH1 dev photos)."""
         return cls(skyline_method="select", max_hypotheses=0, final_refinements=8, max_refinements=4,
                    max_horizon_refinements=16, escalate_refinements=0, rescore_refinements=0,
-                   # fov unknown: 3 coarse fovs and 4 probes instead of 5 and 6 (the refinement fits the focal
-                   # length): on 20 training photos the same or better answers in 41.0 s instead of 64.7 s
-                   # (experiments/ch1/fov-unknown-fast/)
-                   fov_candidates=PHOTO_FOV_CANDIDATES, horizon_fov_step=(5.0, 2.5),
+                   # fov unknown: 5 coarse fovs 10-80 deg and 4 probes (the refinement fits the focal length);
+                   # 35-65 deg, the training side's range, missed every telephoto (experiments/ch1/fov-unknown-range/)
+                   fov_candidates=PHOTO_FOV_CANDIDATES, horizon_fov_step=PHOTO_FOV_STEPS, fov_step_ratio=True,
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=PHOTO_RUNNER_UP_M, confidence_model="margin",
                    margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,
                    min_confidence_fov_unknown=PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN,
@@ -636,7 +641,7 @@ def _far_horizon_candidates(search: _Search) -> None:
                 xy = np.concatenate([v[1][:, :2] for v in verified.values()])
                 found = centre_indices(search.model.horizons, xy)
                 return verify_at(fov_i, found[found >= 0])
-        _narrow_fov(verified, probe, params.horizon_fov_step)
+        _narrow_fov(verified, probe, params.horizon_fov_step, params.fov_step_ratio)
     # a wrong focal length scales the skyline's azimuths: the best fits pick the fov
     for fov_i in sorted(verified, key=lambda f: _best_of(verified[f][2]))[: 1 if search.fov is not None else 2]:
         f_px, poses, score, trusted = verified[fov_i]
@@ -837,13 +842,18 @@ def _best_of(score: np.ndarray) -> float:
     return float(score.min()) if len(score) else np.inf
 
 
-def _narrow_fov(verified: dict, verify_at, steps: tuple[float, ...]) -> None:
+def _narrow_fov(verified: dict, verify_at, steps: tuple[float, ...], ratio: bool = False) -> None:
     """Unknown fov: bisect around the best-fitting fov so far (by the far-horizon poses'
-    best verification score), one probe on each side per step (deg)."""
+    best verification score), one probe on each side per step: ``best -+ step`` (deg) within
+    the fovs tried, or with ``ratio`` ``best / (1 + step)`` and ``best * (1 + step)`` within
+    the fovs tried widened by the first step's ratio."""
     lo, hi = min(verified), max(verified)
+    if ratio and steps:
+        lo, hi = lo / (1.0 + steps[0]), hi * (1.0 + steps[0])
     for step in steps:
         best = min(verified, key=lambda f: _best_of(verified[f][2]))
-        for f in (best - step, best + step):
+        probes = (best / (1.0 + step), best * (1.0 + step)) if ratio else (best - step, best + step)
+        for f in probes:
             if lo <= f <= hi and f not in verified:
                 verify_at(f)
 
