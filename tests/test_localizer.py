@@ -896,6 +896,39 @@ def test_localizes_with_unknown_field_of_view(scene, views):
     assert result.fov == pytest.approx(54.0, abs=0.75)
 
 
+def test_the_photo_preset_searches_a_telephoto_range_apart_when_the_fov_is_unknown():
+    """With the fov unknown the photo preset also searches 14 and 21 deg, probing by ratios: a
+    200 mm lens (35 mm frame, 10.3 deg, just outside) ends within 11 % of a fov tried, CH1's 14.4-deg
+    telephotos and an 85 mm lens (23.9 deg) within 6 % (35-65 deg probed +-5 and +-2.5 deg never
+    comes below 30). The probes stay within the range widened by the first ratio step. Its
+    candidates are refined on a budget of their own: a wrong place fits a narrow view better than
+    the right place fits a wide one before refinement, and would otherwise take every refinement."""
+    from skyrender.localizer.pipeline import PHOTO_TELEPHOTO_FOVS, PHOTO_TELEPHOTO_STEPS, _Candidate, _narrow_fov, _next_to_refine
+
+    params = LocalizeParams.for_photos()
+    assert params.telephoto_fovs == PHOTO_TELEPHOTO_FOVS and min(params.fov_candidates) - params.horizon_fov_step[0] >= 30
+    for true_fov, within in ((10.3, 1.11), (14.4, 1.06), (19.5, 1.06), (23.9, 1.06)):
+        tried = []
+
+        def verify_at(fov, true_fov=true_fov, tried=tried):  # the best fit where the fov is right
+            tried.append(fov)
+            verified[fov] = (0.0, None, np.array([abs(math.log(fov / true_fov))]), None)
+
+        verified = {}
+        for fov in PHOTO_TELEPHOTO_FOVS:
+            verify_at(fov)
+        _narrow_fov(verified, verify_at, PHOTO_TELEPHOTO_STEPS, ratio=True)
+        best = min(verified, key=lambda f: verified[f][2][0])
+        assert abs(math.log(best / true_fov)) <= math.log(within), (true_fov, sorted(verified))
+        widen = 1.0 + PHOTO_TELEPHOTO_STEPS[0]
+        assert PHOTO_TELEPHOTO_FOVS[0] / widen - 1e-9 <= min(tried) and max(tried) <= PHOTO_TELEPHOTO_FOVS[-1] * widen + 1e-9
+    pose = np.zeros(6)
+    wide = [_Candidate(pose, 900.0, 2.0 + i, 2.0 + i, None) for i in range(20)]
+    narrow = [_Candidate(pose, 3000.0, 1.0 + i / 100, 1.0 + i / 100, None, lens=1) for i in range(20)]
+    picked = _next_to_refine(wide + narrow, 8, params, budgeted=False, peaks=False)
+    assert sum(c.lens == 0 for c in picked) == 8 and sum(c.lens == 1 for c in picked) == params.telephoto_refinements
+
+
 def test_localizes_on_a_real_dem():
     """SRTM 30 m of Big Tujunga (San Gabriel Mountains): a rendered mountain view."""
     from skyrender.dem import load_dem

@@ -52,11 +52,13 @@ from .verification import ScoreParams, verify_poses
 
 #: Focal lengths tried when the field of view is unknown (horizontal fov, degrees).
 FOV_CANDIDATES = (30.0, 40.0, 50.0, 60.0, 70.0)
-#: ... and the photo preset's: a ratio of 1.5 apart, from telephoto to wide angle (a 200 mm lens on a
-#: 35 mm frame sees 10.3 deg, a 24 mm one 73.7 deg; CH1's photos 10.6-67.4 deg), each probe
-#: (:data:`PHOTO_FOV_STEPS`) halving the ratio
-PHOTO_FOV_CANDIDATES = (13.0, 19.5, 29.25, 43.875, 65.8125)
-PHOTO_FOV_STEPS = (1.5 ** 0.5 - 1.0, 1.5 ** 0.25 - 1.0)
+#: ... and the photo preset's (CH1's training side: 33-57 deg)
+PHOTO_FOV_CANDIDATES = (35.0, 50.0, 65.0)
+#: ... and its telephoto range, searched apart: a ratio of 1.5 apart, each probe
+#: (:data:`PHOTO_TELEPHOTO_STEPS`) halving the ratio: 11.4-25.7 deg with the probes (a 200 mm lens
+#: on a 35 mm frame sees 10.3 deg, a 85 mm one 23.9 deg; a third of CH1's validation photos, 10.6-28 deg)
+PHOTO_TELEPHOTO_FOVS = (14.0, 21.0)
+PHOTO_TELEPHOTO_STEPS = (1.5 ** 0.5 - 1.0, 1.5 ** 0.25 - 1.0)
 #: The photo confidence P(within 1 km) = logistic(a + b * margin): (a, b) fitted on the CH1
 #: training side by ``python -m skyrender.training.localize_fit``, which writes this file.
 PHOTO_CONFIDENCE_FILE = os.path.join(os.path.dirname(__file__), "photo_confidence.json")
@@ -154,9 +156,13 @@ class LocalizeParams:
     horizon: HorizonSearchParams = field(default_factory=HorizonSearchParams)
     fov_candidates: tuple = FOV_CANDIDATES  # unknown fov: horizontal fovs (deg) tried first
     horizon_fov_step: tuple = (5.0, 2.5, 1.25)  # unknown fov: probes around the best fov of the far-horizon search
-    # ... those steps as ratios (probes at best * (1 + s) and best / (1 + s), the range tried widened by the
-    # first): equal steps of a focal length's ratio, from telephoto to wide angle (False: steps in deg)
-    fov_step_ratio: bool = False
+    # unknown fov: a telephoto range searched apart (horizontal fovs, deg; empty: none), its probes as ratios
+    # (at best / (1 + s) and best * (1 + s), within the range widened by the first), and how many of its
+    # candidates are refined by each ranking beside the others (a wrong place fits a narrow view better
+    # than the right place a wide one before refinement, not after: experiments/ch1/fov-unknown-range/)
+    telephoto_fovs: tuple = ()
+    telephoto_fov_step: tuple = ()
+    telephoto_refinements: int = 4
     # ... which search only the horizon centres of the poses kept at the fovs tried before (False: every centre)
     fov_probes_on_found: bool = True
     # the answer and its runner-up are taken among refined poses whose ground slopes at most this (deg;
@@ -211,9 +217,12 @@ class LocalizeParams:
         fit too, ``HorizonSearchParams.max_swing_deg``, it lost a confident answer on the CH1 dev photos)."""
         return cls(skyline_method="select", max_hypotheses=0, final_refinements=8, max_refinements=4,
                    max_horizon_refinements=16, escalate_refinements=0, rescore_refinements=0,
-                   # fov unknown: 5 coarse fovs 10-80 deg and 4 probes (the refinement fits the focal length);
-                   # 35-65 deg, the training side's range, missed every telephoto (experiments/ch1/fov-unknown-range/)
-                   fov_candidates=PHOTO_FOV_CANDIDATES, horizon_fov_step=PHOTO_FOV_STEPS, fov_step_ratio=True,
+                   # fov unknown: 3 coarse fovs and 4 probes instead of 5 and 6 (the refinement fits the focal
+                   # length): on 20 training photos the same or better answers in 41.0 s instead of 64.7 s
+                   # (experiments/ch1/fov-unknown-fast/); and a telephoto range apart, which 35-65 deg never reaches
+                   # (experiments/ch1/fov-unknown-range/)
+                   fov_candidates=PHOTO_FOV_CANDIDATES, horizon_fov_step=(5.0, 2.5),
+                   telephoto_fovs=PHOTO_TELEPHOTO_FOVS, telephoto_fov_step=PHOTO_TELEPHOTO_STEPS,
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=PHOTO_RUNNER_UP_M, confidence_model="margin",
                    margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,
                    min_confidence_fov_unknown=PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN,
@@ -336,6 +345,7 @@ class _Candidate:
     points: np.ndarray | None  # (3, 3) the hypothesis' matched feature points (None: from the horizons)
     refined: Refined | None = None
     ground_slope: float = math.nan  # deg, under the refined pose (DEM.slope_deg)
+    lens: int = 0  # the fov range a far-horizon candidate was found in (1: LocalizeParams.telephoto_fovs)
 
 
 def standable_mask(slopes, max_slope_deg: float) -> np.ndarray:
@@ -605,13 +615,16 @@ def _far_horizon_candidates(search: _Search) -> None:
     """Stage 3c: poses from the far-horizon search at each fov tried (bisected around the
     best when the fov is unknown: those probes search only the horizon centres found at the
     fovs before, ``LocalizeParams.fov_probes_on_found``), verified; the best of the
-    best-fitting fov (two fovs when unknown) join the candidates."""
+    best-fitting fov (two fovs when unknown) join the candidates. With the fov unknown and
+    ``telephoto_fovs`` given, the telephoto range is searched and bisected the same way apart,
+    and the best of its two best-fitting fovs join the candidates as lens range 1 (refined on a
+    budget of their own: before refinement a wrong place fits a narrow view better than the
+    right place a wide one, experiments/ch1/fov-unknown-range/)."""
     params, stats, features = search.params, search.stats, search.model.features.xyz
-    verified = {}  # fov -> (f_px, poses, plain score, second ranking)
 
-    def verify_at(fov_i: float, centres: np.ndarray | None = None) -> float:
-        """Far-horizon poses at one fov (from ``centres`` only, when given), verified; returns
-        their best plain score (px)."""
+    def verify_at(verified: dict, fov_i: float, centres: np.ndarray | None = None) -> float:
+        """Far-horizon poses at one fov (from ``centres`` only, when given), verified into ``verified``
+        (fov -> (f_px, poses, plain score, second ranking)); returns their best plain score (px)."""
         k_i = search.intrinsics(fov_i)
         with stats.timed("horizon_search"):
             poses, cost = horizon_poses(search.model.horizons, search.sky, search.weights, k_i, search.model.dem,
@@ -632,24 +645,30 @@ def _far_horizon_candidates(search: _Search) -> None:
         return _best_of(score)
 
     standable = standable_centres(search.model.horizons, search.model.dem, params.max_ground_slope_deg)
-    for fov_i in search.fovs:
-        verify_at(fov_i, standable)
-    if search.fov is None:
-        probe = verify_at
-        if params.fov_probes_on_found:
-            def probe(fov_i: float) -> float:  # the place is found at the coarse fovs; a probe only picks the fov
+    ranges = [(search.fovs, params.horizon_fov_step, False)]
+    if search.fov is None and params.telephoto_fovs:
+        ranges.append((tuple(params.telephoto_fovs), params.telephoto_fov_step, True))
+    for lens, (fovs, steps, ratio) in enumerate(ranges):
+        verified = {}
+        for fov_i in fovs:
+            verify_at(verified, fov_i, standable)
+        if search.fov is None:
+            def probe(fov_i: float, verified=verified) -> float:
+                if not params.fov_probes_on_found:
+                    return verify_at(verified, fov_i)
+                # the place is found at the coarse fovs; a probe only picks the fov
                 xy = np.concatenate([v[1][:, :2] for v in verified.values()])
                 found = centre_indices(search.model.horizons, xy)
-                return verify_at(fov_i, found[found >= 0])
-        _narrow_fov(verified, probe, params.horizon_fov_step, params.fov_step_ratio)
-    # a wrong focal length scales the skyline's azimuths: the best fits pick the fov
-    for fov_i in sorted(verified, key=lambda f: _best_of(verified[f][2]))[: 1 if search.fov is not None else 2]:
-        f_px, poses, score, trusted = verified[fov_i]
-        if params.horizon_rerank:
-            with stats.timed("rerank"):
-                poses, score, trusted = _rerank(search, poses, score, trusted, fov_i)
-        _add_candidates(search.candidates, poses, score, trusted, f_px, None, params)
-        search.horizon_pool.append((f_px, fov_i, poses))
+                return verify_at(verified, fov_i, found[found >= 0])
+            _narrow_fov(verified, probe, steps, ratio)
+        # a wrong focal length scales the skyline's azimuths: the best fits pick the fov
+        for fov_i in sorted(verified, key=lambda f: _best_of(verified[f][2]))[: 1 if search.fov is not None else 2]:
+            f_px, poses, score, trusted = verified[fov_i]
+            if params.horizon_rerank:
+                with stats.timed("rerank"):
+                    poses, score, trusted = _rerank(search, poses, score, trusted, fov_i)
+            _add_candidates(search.candidates, poses, score, trusted, f_px, None, params, lens)
+            search.horizon_pool.append((f_px, fov_i, poses))
 
 
 def _rerank(search: _Search, poses: np.ndarray, score: np.ndarray, second: np.ndarray,
@@ -859,9 +878,10 @@ def _narrow_fov(verified: dict, verify_at, steps: tuple[float, ...], ratio: bool
 
 
 def _add_candidates(candidates: list[_Candidate], poses: np.ndarray, score: np.ndarray, trusted: np.ndarray,
-                    f_px: float, points: np.ndarray | None, params: LocalizeParams) -> None:
+                    f_px: float, points: np.ndarray | None, params: LocalizeParams, lens: int = 0) -> None:
     """Append the best verified poses by each score (distinct from those already kept);
-    ``points`` (P, 3, 3): each pose's matched feature points, None for horizon poses."""
+    ``points`` (P, 3, 3): each pose's matched feature points, None for horizon poses; ``lens``:
+    the fov range searched (0, or 1 for the telephoto range)."""
     n = 4 * params.final_refinements
     best = np.unique(np.r_[np.argsort(score)[:n], np.argsort(trusted)[:n]]).astype(np.int64)
     kept = [c.pose for c in candidates if (c.points is None) == (points is None)]  # each source apart
@@ -869,7 +889,7 @@ def _add_candidates(candidates: list[_Candidate], poses: np.ndarray, score: np.n
         if _distinct(kept, poses[j], params.same_pose_m):
             kept.append(poses[j])
             candidates.append(_Candidate(poses[j], f_px, float(score[j]), float(trusted[j]),
-                                         None if points is None else points[j]))
+                                         None if points is None else points[j], lens=lens))
 
 
 def _best_by_either(candidates: list[_Candidate], n: int) -> list[_Candidate]:
@@ -882,13 +902,15 @@ def _best_by_either(candidates: list[_Candidate], n: int) -> list[_Candidate]:
 def _next_to_refine(candidates: list[_Candidate], n: int, params: LocalizeParams,
                     budgeted: bool = True, horizons: bool = True, peaks: bool = True) -> list[_Candidate]:
     """:func:`_best_by_either` among the candidates not refined yet, up to ``n`` of the
-    three-point (with ``peaks``) and ``n`` of the far-horizon ones (with ``horizons``), within
-    each one's refinement budget when ``budgeted``."""
+    three-point (with ``peaks``) and ``n`` of the far-horizon ones (with ``horizons``; of those
+    from the telephoto range, ``telephoto_refinements`` apart), within each one's refinement
+    budget when ``budgeted``."""
     picked = []
-    sources = ((True, params.max_refinements), (False, params.max_horizon_refinements))
-    for from_peaks, limit in [s for s in sources if (peaks if s[0] else horizons)]:
-        mine = [c for c in candidates if (c.points is not None) == from_peaks]
-        budget = max(0, min(n, limit - sum(c.refined is not None for c in mine))) if budgeted else n
+    sources = ((True, 0, n, params.max_refinements), (False, 0, n, params.max_horizon_refinements),
+               (False, 1, min(n, params.telephoto_refinements), params.telephoto_refinements))
+    for from_peaks, lens, most, limit in [s for s in sources if (peaks if s[0] else horizons)]:
+        mine = [c for c in candidates if (c.points is not None) == from_peaks and c.lens == lens]
+        budget = max(0, min(most, limit - sum(c.refined is not None for c in mine))) if budgeted else most
         picked += _best_by_either([c for c in mine if c.refined is None], budget)
     return picked
 
