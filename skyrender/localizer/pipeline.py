@@ -219,10 +219,11 @@ class LocalizeParams:
                    max_horizon_refinements=16, escalate_refinements=0, rescore_refinements=0,
                    # fov unknown: 3 coarse fovs and 4 probes instead of 5 and 6 (the refinement fits the focal
                    # length): on 20 training photos the same or better answers in 41.0 s instead of 64.7 s
-                   # (experiments/ch1/fov-unknown-fast/); and a telephoto range apart, which 35-65 deg never reaches
-                   # (experiments/ch1/fov-unknown-range/)
+                   # (experiments/ch1/fov-unknown-fast/). They never come below 30 deg; the telephoto range
+                   # (telephoto_fovs=PHOTO_TELEPHOTO_FOVS, ...) is not in the preset: on the 41 training-side
+                   # photos it kept every answer and added one within 1 km, but the mode's threshold stays 1.00
+                   # and its median rose 27 -> 39 s (experiments/ch1/fov-unknown-range/)
                    fov_candidates=PHOTO_FOV_CANDIDATES, horizon_fov_step=(5.0, 2.5),
-                   telephoto_fovs=PHOTO_TELEPHOTO_FOVS, telephoto_fov_step=PHOTO_TELEPHOTO_STEPS,
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=PHOTO_RUNNER_UP_M, confidence_model="margin",
                    margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,
                    min_confidence_fov_unknown=PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN,
