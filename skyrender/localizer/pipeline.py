@@ -56,7 +56,7 @@ FOV_CANDIDATES = (30.0, 40.0, 50.0, 60.0, 70.0)
 PHOTO_FOV_CANDIDATES = (35.0, 50.0, 65.0)
 #: ... and its telephoto range, searched apart: a ratio of 1.5 apart, each probe
 #: (:data:`PHOTO_TELEPHOTO_STEPS`) halving the ratio: 11.4-25.7 deg with the probes (a 200 mm lens
-#: on a 35 mm frame sees 10.3 deg, a 85 mm one 23.9 deg; a third of CH1's validation photos, 10.6-28 deg)
+#: on a 35 mm frame sees 10.3 deg, an 85 mm one 23.9 deg; a third of CH1's validation photos, 10.6-28 deg)
 PHOTO_TELEPHOTO_FOVS = (14.0, 21.0)
 PHOTO_TELEPHOTO_STEPS = (1.5 ** 0.5 - 1.0, 1.5 ** 0.25 - 1.0)
 #: The photo confidence P(within 1 km) = logistic(a + b * margin): (a, b) fitted on the CH1
