@@ -35,7 +35,7 @@ bench-skyline: install
 
 # real photos (CH1 validation side) localized against an SRTM mosaic around each place
 bench-real: install
-	$(BIN)/python -m skyrender.benchmarks.real_localize --side validation --unknown-every 10
+	$(BIN)/python -m skyrender.benchmarks.real_localize --side validation
 
 # the best fit of each CH1 training photo at its true position (what a localizer can hope for)
 oracle: install

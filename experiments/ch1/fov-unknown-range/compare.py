@@ -1,6 +1,8 @@
 """Per photo, two fov-unknown runs of `real_localize` side by side, with each photo's true fov.
 
-python experiments/ch1/fov-unknown-range/compare.py BEFORE.json AFTER.json [--threshold T]
+python experiments/ch1/fov-unknown-range/compare.py BEFORE.json [AFTER.json] [--threshold T]
+
+(one run alone: its rows by true fov)
 
 Each row: true horizontal fov (CH1 index), then per run the fov found, the error (m) and the
 confidence under the shipped fit (``skyrender/localizer/photo_confidence.json``, recomputed from each
@@ -41,25 +43,26 @@ def error_of(r):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("before")
-    parser.add_argument("after")
+    parser.add_argument("after", nargs="?")
     parser.add_argument("--threshold", type=float, default=0.9)
     parser.add_argument("--index", default=INDEX)
     args = parser.parse_args()
     with open(args.index) as f:
         true_fov = {"ch1/" + r["id"]: float(r["hfov_deg"]) for r in csv.DictReader(f)}
-    runs = [rows_of(args.before), rows_of(args.after)]
+    runs = [rows_of(args.before)] + ([rows_of(args.after)] if args.after else [])
     for r in runs:
         for row in r.values():
             row["confidence"] = confidence_of(row)
-    keys = sorted(set(runs[0]) & set(runs[1]), key=lambda k: (true_fov[k], k))
-    print(f"{'photo':34s} {'true':>5s} | {'before: fov':>11s} {'error m':>8s} {'conf':>5s} | {'after: fov':>10s} {'error m':>8s} {'conf':>5s}")
+    names = ("before", "after") if args.after else ("run",)
+    keys = sorted(set.intersection(*(set(r) for r in runs)), key=lambda k: (true_fov[k], k))
+    print(f"{'photo':34s} {'true':>5s} | " + " | ".join(f"{n + ': fov':>11s} {'error m':>8s} {'conf':>5s}" for n in names))
     for k in keys:
         cells = [f"{r[k]['fov']:11.1f} {error_of(r[k]):8.0f} {r[k]['confidence']:5.2f}" for r in runs]
-        print(f"{k:34s} {true_fov[k]:5.1f} | {cells[0]} | {cells[1]}")
+        print(f"{k:34s} {true_fov[k]:5.1f} | " + " | ".join(cells))
     for label, subset in (("all", keys), ("true fov < 30 deg", [k for k in keys if true_fov[k] < 30.0]),
                           ("true fov >= 30 deg", [k for k in keys if true_fov[k] >= 30.0])):
         print(f"\n{label} ({len(subset)} photos)")
-        for name, r in zip(("before", "after"), runs):
+        for name, r in zip(names, runs):
             err = [error_of(r[k]) for k in subset]
             conf = [r[k]["confidence"] for k in subset]
             ans = [(e, c) for e, c in zip(err, conf) if c >= args.threshold]
