@@ -413,6 +413,20 @@ def _distinct(poses: list[np.ndarray], pose: np.ndarray, same_m: float) -> bool:
     return True
 
 
+def _take_distinct(poses: np.ndarray, order, taken: list[np.ndarray], same_m: float,
+                   limit: int | None = None) -> list[int]:
+    """Indices of ``poses``, walked in ``order``, distinct (:func:`_distinct`) from ``taken`` and
+    from each other, at most ``limit``; each taken pose is appended to ``taken``."""
+    picked = []
+    for j in order:
+        if limit is not None and len(picked) == limit:
+            break
+        if _distinct(taken, poses[j], same_m):
+            taken.append(poses[j])
+            picked.append(int(j))
+    return picked
+
+
 def confidence_of(best: Refined, runner_up: Refined | None) -> float:
     """Agreement of the best refined pose, discounted when a distinct pose fits almost as
     well: by agreement, or by score (a wrong pose 200 m off scored 0.25 px where the
@@ -587,14 +601,10 @@ def _rescored_horizon_candidates(search: _Search) -> list[_Candidate]:
                                      search.weights, params.rescore_half_m, params.rescore_grid, params.rescore_stride,
                                      params.score)
         search.stats.verified += len(poses) * params.rescore_grid ** 2
-        n = 0
-        for j in np.argsort(score, kind="stable"):
-            if n == params.rescore_refinements or not np.isfinite(score[j]):
-                break
-            if _distinct(taken, moved[j], params.same_pose_m):
-                taken.append(moved[j])
-                added.append(_Candidate(moved[j], f_px, float(score[j]), float(score[j]), None))
-                n += 1
+        order = np.argsort(score, kind="stable")
+        order = order[np.isfinite(score[order])]
+        for j in _take_distinct(moved, order, taken, params.same_pose_m, params.rescore_refinements):
+            added.append(_Candidate(moved[j], f_px, float(score[j]), float(score[j]), None))
     search.candidates.extend(added)
     return added
 
@@ -886,11 +896,9 @@ def _add_candidates(candidates: list[_Candidate], poses: np.ndarray, score: np.n
     n = 4 * params.final_refinements
     best = np.unique(np.r_[np.argsort(score)[:n], np.argsort(trusted)[:n]]).astype(np.int64)
     kept = [c.pose for c in candidates if (c.points is None) == (points is None)]  # each source apart
-    for j in best[np.argsort(score[best])]:
-        if _distinct(kept, poses[j], params.same_pose_m):
-            kept.append(poses[j])
-            candidates.append(_Candidate(poses[j], f_px, float(score[j]), float(trusted[j]),
-                                         None if points is None else points[j], lens=lens))
+    for j in _take_distinct(poses, best[np.argsort(score[best])], kept, params.same_pose_m):
+        candidates.append(_Candidate(poses[j], f_px, float(score[j]), float(trusted[j]),
+                                     None if points is None else points[j], lens=lens))
 
 
 def _best_by_either(candidates: list[_Candidate], n: int) -> list[_Candidate]:
