@@ -312,8 +312,12 @@ def localize(
                    f"tilt={d['tilt']:.2f} swing={d['swing']:.2f} fov={d['fov']:.2f}; confidence "
                    f"{d['confidence']:.2f}; {d['hypotheses']} hypotheses in {d['seconds']:.1f} s")
     else:
+        # with the fov unknown the photo preset answers almost never (its threshold, from the training photos, is
+        # 1.00: experiments/ch1/README.md): say what would change that
+        hint = ("; the field of view was unknown: give --fov (or a photo with an EXIF focal length)"
+                if fov is None else "")
         typer.echo(f"abstained: no pose found that fits the skyline well enough ({result.hypotheses} hypotheses, "
-                   f"{result.seconds:.1f} s)")
+                   f"{result.seconds:.1f} s){hint}")
     return 0 if result.localized else 3
 
 

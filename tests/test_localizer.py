@@ -806,6 +806,11 @@ def test_cli_localize_abstains_with_exit_3(model_dir, tmp_path, capsys):
     write_image(tmp_path / "sky.png", sky)
     code, out, _ = _run(capsys, ["localize", tmp_path / "sky.png", "--model", model_dir, "--height", 2, "--json"])
     assert code == 3 and json.loads(out)["status"] == "abstained"
+    # without --json the line says why, and with the fov unknown (no --fov, no EXIF) what would help
+    code, out, _ = _run(capsys, ["localize", tmp_path / "sky.png", "--model", model_dir, "--height", 2])
+    assert code == 3 and out.startswith("abstained:") and "give --fov" in out
+    code, out, _ = _run(capsys, ["localize", tmp_path / "sky.png", "--model", model_dir, "--height", 2, "--fov", 60])
+    assert code == 3 and out.startswith("abstained:") and "--fov" not in out
 
 
 @pytest.mark.parametrize("case", ["no_model", "both", "negative_height", "bad_fov", "missing_image", "bad_prior",
