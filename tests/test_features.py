@@ -578,3 +578,42 @@ def test_select_takes_the_mixtures_where_the_network_follows_a_cable(seed, built
     assert np.median(e) <= 0.5 and np.mean(e <= 5) >= 0.95
     np.testing.assert_array_equal(runs["select"].skyline, runs["gmm"].skyline)
     np.testing.assert_array_equal(runs["select"].confidence, runs["gmm"].confidence)
+
+
+def test_select_runs_the_mixtures_only_where_the_hybrid_doubts(builtin_view, monkeypatch):
+    """With ``select_gmm_above`` set, ``select`` runs gmm only where more than that share of the hybrid's
+    columns have confidence below 0.5. On a clear render the hybrid is sure of every column: the answer is
+    its own skyline and confidence, to the bit, and gmm never runs; at 0 (the default: gmm always) both
+    run and, within 5 px everywhere, the hybrid's skyline is kept all the same. With two cables left in,
+    the hybrid doubts the columns where it follows one, so gmm runs."""
+    from skyrender.features import SkylineParams
+    from skyrender.features import skyline as extraction
+
+    terrain, pose, K = builtin_view
+    image = render_photo(terrain, pose, K, Look(sky="clear", seed=3)).image
+    ran = []
+    original = extraction._extract
+
+    def counting(image, features, edges, method, params):
+        ran.append(method)
+        return original(image, features, edges, method, params)
+
+    monkeypatch.setattr(extraction, "_extract", counting)
+    hybrid = extract_skyline(image, SkylineParams(method="hybrid"))
+    assert np.mean(hybrid.confidence < 0.5) <= 0.02
+    ran.clear()
+    gated = extract_skyline(image, SkylineParams(method="select", select_gmm_above=0.02))
+    assert ran == ["hybrid"]
+    np.testing.assert_array_equal(gated.skyline, hybrid.skyline)
+    np.testing.assert_array_equal(gated.confidence, hybrid.confidence)
+    ran.clear()
+    always = extract_skyline(image, SkylineParams(method="select"))
+    assert sorted(ran) == ["gmm", "hybrid"]
+    np.testing.assert_array_equal(always.skyline, hybrid.skyline)
+    ran.clear()
+    cabled = render_photo(terrain, pose, K, Look(sky="clear", power_lines=2, seed=14)).image
+    extract_skyline(cabled, SkylineParams(method="select", cables=None, select_gmm_above=0.02))
+    assert ran == ["hybrid", "gmm"]
+    # the rule itself: strictly more than the share
+    doubt = extraction.ExtractedSkyline(np.zeros(100), np.r_[np.full(2, 0.4), np.full(98, 0.9)], np.zeros((4, 100)))
+    assert not extraction.hybrid_in_doubt(doubt, 0.02) and extraction.hybrid_in_doubt(doubt, 0.01)

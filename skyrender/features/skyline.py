@@ -16,9 +16,10 @@
    per-column confidence: the probability margin times the colour contrast, or, with
    the network, a logistic model of "within 5 px of the truth" on those and the
    boundary's roughness, fitted on the dev photos (``weights/sky_net_fit.json``).
-4. With ``method="select"`` both ``hybrid`` and ``gmm`` run, and where their skylines
-   part, the one more confident over the disputed columns is kept
-   (:func:`select_skylines`): they fail on different photos.
+4. With ``method="select"`` both ``hybrid`` and ``gmm`` run (with ``select_gmm_above``
+   set, ``gmm`` only where the hybrid doubts more than that share of its columns:
+   :func:`hybrid_in_doubt`), and where their skylines part, the one more confident over
+   the disputed columns is kept (:func:`select_skylines`): they fail on different photos.
 
 Photos wider than :attr:`SkylineParams.work_width` (a 12-megapixel phone photo) are
 processed on a copy reduced to :attr:`SkylineParams.reduced_width`; the boundary is then refined at full resolution in a
@@ -57,8 +58,8 @@ class SkylineParams:
     # "gmm": per-photo colour mixtures (default: it also holds on renders); "net": the learned
     # sky probability (24x faster, not trained on renders); "hybrid": the network's boundary
     # seeds per-photo mixtures (0.5 s); "select": hybrid and gmm both, and where they part, the one
-    # more confident on the disputed columns (:func:`select_skylines`; best on unseen real photos, 1.1 s,
-    # the two on a thread each)
+    # more confident on the disputed columns (:func:`select_skylines`; best on unseen real photos, 0.7-1.1 s,
+    # the two on a thread each; with ``select_gmm_above`` gmm only where the hybrid doubts)
     method: str = "gmm"
     jump_cost: float = 0.25  # per pixel of boundary jump between columns
     jump_cap: float = 12.0  # no jump costs more than this (vertical edges)
@@ -94,6 +95,13 @@ class SkylineParams:
     cables: CableParams | None = CableParams()
     # "select": hybrid and gmm part ways where their skylines lie more than this apart (px)
     select_tol_px: float = 5.0
+    # "select": gmm runs only where more than this share of the hybrid's columns have confidence below 0.5, the
+    # hybrid's skyline kept as it is on the others; 0: gmm always (the default). An option for speed: at 0.02 gmm
+    # runs on a third of the photos and select takes 0.38 s a photo (median) instead of 0.72 s; chosen on the dev
+    # and training photos (target met on 24 / 58 against 23 / 59), but on the validation side 46 of 80 photos meet
+    # the target against 48, and one CH1 right answer loses its confidence (experiments/photos/select-gate/).
+    # A localization takes 12-30 s: the 0.35 s is not worth it there.
+    select_gmm_above: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -265,6 +273,13 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
     features = pixel_features(image)
     edges = _edge_strength(features, params.edge_percentile)
     if params.method == "select":
+        if params.select_gmm_above > 0:
+            # the hybrid first, on both cores; gmm only where the hybrid doubts more than a few columns
+            hybrid = _extract(image, features, edges, "hybrid", params)
+            if not hybrid_in_doubt(hybrid, params.select_gmm_above):
+                return hybrid
+            gmm = _extract(image, features, edges, "gmm", params)
+            return select_skylines(hybrid, gmm, params.select_tol_px)
         from threadpoolctl import threadpool_limits
 
         from ..blocks import concurrently
@@ -304,6 +319,12 @@ def _extract(image: np.ndarray, features: np.ndarray, edges: np.ndarray, method:
     # the confidence model was fitted on the network's probability: its cues come from that
     return ExtractedSkyline(skyline, column_confidence(p_net, rows, contrast, skyline, fitted=True,
                                                        net_width=params.net_width, net_weights=params.net_weights), p)
+
+
+def hybrid_in_doubt(hybrid: ExtractedSkyline, share: float) -> bool:
+    """Whether more than ``share`` of the hybrid's columns have a confidence below 0.5 (its fitted
+    probability of lying within 5 px of the truth): only then does ``method="select"`` run gmm too."""
+    return bool(np.mean(hybrid.confidence < 0.5) > share)
 
 
 def select_skylines(first: ExtractedSkyline, second: ExtractedSkyline, tol_px: float = 5.0) -> ExtractedSkyline:
