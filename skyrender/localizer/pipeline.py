@@ -86,7 +86,7 @@ PHOTO_MARGIN_LOGIT = _photo_margin_logit(_FIT)
 #: the training photos (``localize_fit.abstain_threshold``): above every wrong answer there, and
 #: at least 0.5.
 PHOTO_MIN_CONFIDENCE = float(_FIT.get("min_confidence", 0.8))
-#: ... and with the fov unknown (7 focal lengths searched, margins of another kind): the same rule on
+#: ... and with the fov unknown (several focal lengths searched, margins of another kind): the same rule on
 #: training photos localized that way, never below :data:`PHOTO_MIN_CONFIDENCE`.
 PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN = float(_FIT.get("min_confidence_fov_unknown", PHOTO_MIN_CONFIDENCE))
 #: The photo confidence's runner-up is the best refined pose farther than this (m) from the
