@@ -43,7 +43,8 @@ def rescored(rows: list[dict], a: float, b: float) -> list[dict]:
 def main(path: str = ROWS) -> None:
     rows = json.load(open(path))["rows"]
     print(f"{len(rows)} rows of {os.path.relpath(path, REPO)}")
-    print(f"{'a px/deg roll':>14s} {'b px/deg tilt':>14s} {'within 1 km':>12s} {'kept':>5s} {'threshold':>9s} {'LPO right/wrong':>16s}")
+    print(f"{'a px/deg roll':>14s} {'b px/deg tilt':>14s} {'within 1 km':>12s} {'kept':>5s} {'threshold':>9s} "
+          f"{'LPO right/wrong':>16s}")
     for a in (0.0, 0.025, 0.05, 0.1, 0.2):
         for b in (0.0, 0.05, 0.1):
             fit = fit_confidence(rescored(rows, a, b), (1000.0,))
