@@ -1,0 +1,124 @@
+"""Blur the photo's skyline to the DEM's resolution before scoring (a probe on stored refined poses, 2026-12-05).
+
+``python experiments/ch1/dem-blur/probe.py OUT.json [--places 4] [--cells 0.5 1.0]``
+
+SRTM's 90 m cells cannot draw a ridge's detail finer than about f * 90 m / d px at distance d (18 px at 5 km with a
+1,000 px focal length), while the photo's skyline has it: at the right place part of the residual is that detail.
+For each of the 73 training-side rows (``../confidence-train-rows.json``, fov known) the best ``--places`` distinct
+places (> 1 km apart) among the refined poses are rendered with each column's terrain distance, and scored
+(the photo preset's ``score_skylines``) against the photo's extracted skyline as it is and blurred column by column
+by a Gaussian of sigma = c * f * 90 m / d (c from ``--cells``; at most 30 px). Reported: for each c, how many photos
+have their best-scoring place within 1 km (0 = the plain score, which should give the stored answers), and the
+margin 1 - best / best beyond 1 km for right and wrong answers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+
+import numpy as np
+from scipy.ndimage import gaussian_filter1d
+
+from skyrender.benchmarks.real_localize import place_window, places_of, refined_of
+from skyrender.camera import Intrinsics
+from skyrender.datasets.real_photos import REPO, items_on_side
+from skyrender.dem import load_dem
+from skyrender.diagnostics.oracle import DEM_DIR, tiles_around
+from skyrender.features import extract_skyline, load_photo
+from skyrender.localizer import LocalizeParams
+from skyrender.localizer.pipeline import column_weights
+from skyrender.localizer.verification import score_skylines
+from skyrender.render import Terrain
+from skyrender.render.skyline import render_skylines
+
+ROWS = os.path.join(REPO, "experiments", "ch1", "confidence-train-rows.json")
+CELL_M = 90.0
+SIGMAS = np.arange(0.0, 30.01, 0.5)
+
+
+def blurred_levels(skyline: np.ndarray) -> np.ndarray:
+    """(len(SIGMAS), W): the skyline blurred by each sigma (px), NaN columns left out of the blur and kept NaN."""
+    ok = np.isfinite(skyline)
+    v = np.where(ok, skyline, 0.0)
+    out = np.empty((len(SIGMAS), len(skyline)))
+    for i, s in enumerate(SIGMAS):
+        if s == 0:
+            out[i] = skyline
+            continue
+        num, den = gaussian_filter1d(v, s, mode="nearest"), gaussian_filter1d(ok.astype(float), s, mode="nearest")
+        out[i] = np.where(ok, num / np.maximum(den, 1e-9), np.nan)
+    return out
+
+
+def distinct(poses: np.ndarray, k: int, apart_m: float = 1000.0) -> list[int]:
+    kept: list[int] = []
+    for i in np.argsort(poses[:, 7]):
+        if all(np.hypot(*(poses[i, :2] - poses[j, :2])) > apart_m for j in kept):
+            kept.append(int(i))
+        if len(kept) == k:
+            break
+    return kept
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("out")
+    ap.add_argument("--places", type=int, default=4)
+    ap.add_argument("--cells", type=float, nargs="+", default=[0.5, 1.0])
+    a = ap.parse_args()
+    rows = json.load(open(ROWS))["rows"]
+    items = {it.key: it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")}
+    place_of, centres = places_of(items.values())
+    params = LocalizeParams.for_photos()
+    loaded: dict = {}
+    out = []
+    for row in rows:
+        it = items[row["photo"]]
+        window = place_window(*centres[place_of[it.key]])
+        if window not in loaded:
+            loaded.clear()
+            dem = load_dem(tiles_around(it.lat, it.lon, DEM_DIR), bounds=window)
+            loaded[window] = Terrain(dem)
+        terrain = loaded[window]
+        image = load_photo(it.image_path)
+        H, W = image.shape[:2]
+        ext = extract_skyline(image, params.skyline_params())
+        weights = column_weights(ext.confidence)
+        levels = blurred_levels(ext.skyline.astype(np.float64))
+        poses = refined_of(row)
+        pick = distinct(poses, a.places)
+        k = np.array([[poses[i, 6], W / 2.0, H / 2.0] for i in pick])
+        rendered, distance = render_skylines(terrain, poses[pick, :6], Intrinsics(W, H, float(poses[pick[0], 6]), W / 2, H / 2),
+                                             per_pose_intrinsics=k, with_distance=True)
+        truth = np.asarray(row["truth_xy"])
+        rec = {"photo": it.key, "dist_m": [float(np.hypot(*(poses[i, :2] - truth))) for i in pick],
+               "stored_px": [float(poses[i, 7]) for i in pick], "scores": {}}
+        for c in [0.0] + list(a.cells):
+            scores = []
+            for j, i in enumerate(pick):
+                sigma = np.clip(c * poses[i, 6] * CELL_M / np.where(np.isfinite(distance[j]), distance[j], 1e9), 0, 30)
+                level = np.clip(np.round(sigma / 0.5).astype(int), 0, len(SIGMAS) - 1)
+                photo = levels[level, np.arange(W)]
+                scores.append(float(score_skylines(rendered[j][None], photo, weights, params.score)[0][0]))
+            rec["scores"][str(c)] = scores
+        out.append(rec)
+        print(it.key, {c: [round(s, 2) for s in v] for c, v in rec["scores"].items()},
+              [round(d / 1000, 1) for d in rec["dist_m"]], flush=True)
+    json.dump(out, open(a.out, "w"), indent=1)
+    for c in ["0.0"] + [str(c) for c in a.cells]:
+        right, margins = 0, {True: [], False: []}
+        for rec in out:
+            s, d = np.array(rec["scores"][c]), np.array(rec["dist_m"])
+            b = int(np.argmin(s))
+            ok = d[b] <= 1000
+            right += ok
+            rest = np.delete(s, b)
+            margins[bool(ok)].append(1 - s[b] / rest.min() if len(rest) else 1.0)
+        print(f"c = {c}: best place within 1 km on {right} of {len(out)}; margin median right "
+              f"{np.median(margins[True]):.3f}, wrong {np.median(margins[False]):.3f}")
+
+
+if __name__ == "__main__":
+    main()
