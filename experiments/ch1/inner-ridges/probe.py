@@ -59,12 +59,13 @@ def photo_edges(image: np.ndarray, skyline: np.ndarray, w: int) -> tuple[np.ndar
     return cv2.dilate(edges.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool), terrain
 
 
-def contours(t: np.ndarray, ratio: float = 1.5) -> np.ndarray:
-    """(h, w) bool: pixel v where the terrain distance of the pixel above is > ratio x its own (an occluding ridge)."""
+def contours(t: np.ndarray, ratio: float = 1.5, min_m: float = 0.0) -> np.ndarray:
+    """(h, w) bool: pixel v where the terrain distance of the pixel above is > ratio x its own (an occluding ridge),
+    the ridge itself at least ``min_m`` away."""
     out = np.zeros(t.shape, bool)
     above, below = t[:-1], t[1:]
     ok = np.isfinite(above) & np.isfinite(below)
-    out[1:] = ok & (above > ratio * below)
+    out[1:] = ok & (above > ratio * below) & (below >= min_m)
     return out
 
 
@@ -73,6 +74,8 @@ def main() -> None:
     ap.add_argument("out")
     ap.add_argument("--places", type=int, default=4)
     ap.add_argument("--width", type=int, default=256)
+    ap.add_argument("--ratio", type=float, default=1.5)
+    ap.add_argument("--min-km", type=float, default=0.0, help="only contours of ridges this far or farther")
     a = ap.parse_args()
     rows = json.load(open(ROWS))["rows"]
     items = {it.key: it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")}
@@ -100,7 +103,7 @@ def main() -> None:
             s = a.width / W
             K = Intrinsics(a.width, h, poses[i, 6] * s, a.width / 2, h / 2)
             t, *_ = cast_pixel_rays(terrain, Pose.from_array(poses[i, :6]), K)
-            c = contours(t) & terrain_px
+            c = contours(t, a.ratio, a.min_km * 1000.0) & terrain_px
             support = float(edges[c].mean()) - chance if c.sum() >= 20 else float("nan")
             rec["places"].append({"dist_m": float(np.hypot(*(poses[i, :2] - truth))), "score": float(poses[i, 7]),
                                   "contour_px": int(c.sum()), "support": support})
