@@ -76,9 +76,11 @@ def main() -> None:
     ap.add_argument("--width", type=int, default=256)
     ap.add_argument("--ratio", type=float, default=1.5)
     ap.add_argument("--min-km", type=float, default=0.0, help="only contours of ridges this far or farther")
+    ap.add_argument("--rows", default=ROWS, help="a real_localize run's JSON instead (its fov-known rows): a report")
     a = ap.parse_args()
-    rows = json.load(open(ROWS))["rows"]
-    items = {it.key: it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")}
+    doc = json.load(open(a.rows))
+    rows = [r for r in doc.get("rows", doc.get("photos", [])) if r.get("fov_mode", "known") == "known"]
+    items = {it.key: it for side in ("train", "dev", "validation") for it in items_on_side(side) if it.key.startswith("ch1/")}
     place_of, centres = places_of(items.values())
     params = LocalizeParams.for_photos()
     loaded: dict = {}
@@ -98,7 +100,8 @@ def main() -> None:
         h = edges.shape[0]
         poses = refined_of(row)
         truth = np.asarray(row["truth_xy"])
-        rec = {"photo": it.key, "chance": chance, "places": []}
+        rec = {"photo": it.key, "chance": chance, "error_m": row.get("error_m", row.get("withheld_error_m")),
+               "confidence": row["confidence"], "places": []}
         for i in distinct(poses, a.places):
             s = a.width / W
             K = Intrinsics(a.width, h, poses[i, 6] * s, a.width / 2, h / 2)
