@@ -56,18 +56,40 @@ def places_of(items) -> tuple[dict[str, str], dict[str, tuple[float, float]]]:
     return place_of, {place: tuple(np.mean(p, axis=0)) for place, p in positions.items()}
 
 
-def load_place(lat: float, lon: float, model_params=None):
-    """(dem, terrain, model, window) of a place centred at (lat, lon): the SRTM3 mosaic
-    within :func:`place_window`, its model (``model_params``, default the photo preset's)
-    built once and cached."""
+def place_dem(lat: float, lon: float):
+    """(dem, window) of a place centred at (lat, lon): the SRTM3 mosaic within :func:`place_window`."""
     from ..dem import load_dem
+
+    window = place_window(lat, lon)
+    return load_dem(tiles_around(lat, lon, DEM_DIR), bounds=window), window
+
+
+def load_place(lat: float, lon: float, model_params=None):
+    """(dem, terrain, model, window) of a place centred at (lat, lon): :func:`place_dem`, its
+    model (``model_params``, default the photo preset's) built once and cached."""
     from ..model import ModelParams, cached_model
     from ..render import Terrain
 
-    window = place_window(lat, lon)
-    dem = load_dem(tiles_around(lat, lon, DEM_DIR), bounds=window)
+    dem, window = place_dem(lat, lon)
     terrain = Terrain(dem)
     return dem, terrain, cached_model(dem, model_params or ModelParams.for_photos(), terrain=terrain), window
+
+
+def with_terrain(rows: list[dict], items: dict):
+    """(row, item, terrain) for each of ``rows``, ``items`` mapping photo keys to their items (every photo of
+    their places): each place's terrain (:func:`place_dem`) loaded when its first row comes, one place in
+    memory at a time (rows come place by place)."""
+    from ..render import Terrain
+
+    place_of, centres = places_of(items.values())
+    loaded: dict = {}
+    for row in rows:
+        it = items[row["photo"]]
+        place = place_of[it.key]
+        if place not in loaded:
+            loaded.clear()
+            loaded[place] = Terrain(place_dem(*centres[place])[0])
+        yield row, it, loaded[place]
 
 
 def model_overrides(text: str | None):
@@ -190,6 +212,18 @@ def refined_of(row: dict, max_slope_deg: float | None = None) -> np.ndarray:
     slopes = row.get("refined_slopes") or []
     bound = row.get("max_answer_slope_deg", np.inf) if max_slope_deg is None else max_slope_deg
     return poses[standable_mask(slopes, bound)] if len(slopes) == len(poses) and len(poses) else poses
+
+
+def distinct_places(poses: np.ndarray, k: int | None = None, apart_m: float = 1000.0) -> list[int]:
+    """Indices of refined poses (K, 8: ..., score last), best score first, each farther than ``apart_m``
+    (m) from every one taken before it: the distinct places a row's answer is chosen among; at most ``k``."""
+    kept: list[int] = []
+    for i in np.argsort(poses[:, 7], kind="stable"):
+        if k is not None and len(kept) == k:
+            break
+        if all(np.hypot(*(poses[i, :2] - poses[j, :2])) > apart_m for j in kept):
+            kept.append(int(i))
+    return kept
 
 
 def margin_of(row: dict, runner_up_m: float = 1000.0) -> float:

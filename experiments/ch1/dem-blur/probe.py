@@ -21,16 +21,13 @@ import os
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from skyrender.benchmarks.real_localize import place_window, places_of, refined_of
+from skyrender.benchmarks.real_localize import distinct_places, refined_of, with_terrain
 from skyrender.camera import Intrinsics
 from skyrender.datasets.real_photos import REPO, items_on_side
-from skyrender.dem import load_dem
-from skyrender.diagnostics.oracle import DEM_DIR, tiles_around
 from skyrender.features import extract_skyline, load_photo
 from skyrender.localizer import LocalizeParams
 from skyrender.localizer.pipeline import column_weights
 from skyrender.localizer.verification import score_skylines
-from skyrender.render import Terrain
 from skyrender.render.skyline import render_skylines
 
 ROWS = os.path.join(REPO, "experiments", "ch1", "confidence-train-rows.json")
@@ -52,16 +49,6 @@ def blurred_levels(skyline: np.ndarray) -> np.ndarray:
     return out
 
 
-def distinct(poses: np.ndarray, k: int, apart_m: float = 1000.0) -> list[int]:
-    kept: list[int] = []
-    for i in np.argsort(poses[:, 7]):
-        if all(np.hypot(*(poses[i, :2] - poses[j, :2])) > apart_m for j in kept):
-            kept.append(int(i))
-        if len(kept) == k:
-            break
-    return kept
-
-
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("out")
@@ -70,25 +57,16 @@ def main() -> None:
     a = ap.parse_args()
     rows = json.load(open(ROWS))["rows"]
     items = {it.key: it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")}
-    place_of, centres = places_of(items.values())
     params = LocalizeParams.for_photos()
-    loaded: dict = {}
     out = []
-    for row in rows:
-        it = items[row["photo"]]
-        window = place_window(*centres[place_of[it.key]])
-        if window not in loaded:
-            loaded.clear()
-            dem = load_dem(tiles_around(it.lat, it.lon, DEM_DIR), bounds=window)
-            loaded[window] = Terrain(dem)
-        terrain = loaded[window]
+    for row, it, terrain in with_terrain(rows, items):
         image = load_photo(it.image_path)
         H, W = image.shape[:2]
         ext = extract_skyline(image, params.skyline_params())
         weights = column_weights(ext.confidence)
         levels = blurred_levels(ext.skyline.astype(np.float64))
         poses = refined_of(row)
-        pick = distinct(poses, a.places)
+        pick = distinct_places(poses, a.places)
         k = np.array([[poses[i, 6], W / 2.0, H / 2.0] for i in pick])
         rendered, distance = render_skylines(terrain, poses[pick, :6], Intrinsics(W, H, float(poses[pick[0], 6]), W / 2, H / 2),
                                              per_pose_intrinsics=k, with_distance=True)

@@ -22,27 +22,14 @@ import os
 import cv2
 import numpy as np
 
-from skyrender.benchmarks.real_localize import place_window, places_of, refined_of
+from skyrender.benchmarks.real_localize import distinct_places, refined_of, with_terrain
 from skyrender.camera import Intrinsics, Pose
 from skyrender.datasets.real_photos import REPO, items_on_side
-from skyrender.dem import load_dem
-from skyrender.diagnostics.oracle import DEM_DIR, tiles_around
 from skyrender.features import extract_skyline, load_photo
 from skyrender.localizer import LocalizeParams
-from skyrender.render import Terrain
 from skyrender.render.photo import cast_pixel_rays
 
 ROWS = os.path.join(REPO, "experiments", "ch1", "confidence-train-rows.json")
-
-
-def distinct(poses: np.ndarray, k: int, apart_m: float = 1000.0) -> list[int]:
-    kept: list[int] = []
-    for i in np.argsort(poses[:, 7]):
-        if all(np.hypot(*(poses[i, :2] - poses[j, :2])) > apart_m for j in kept):
-            kept.append(int(i))
-        if len(kept) == k:
-            break
-    return kept
 
 
 def photo_edges(image: np.ndarray, skyline: np.ndarray, w: int) -> tuple[np.ndarray, np.ndarray]:
@@ -81,17 +68,9 @@ def main() -> None:
     doc = json.load(open(a.rows))
     rows = [r for r in doc.get("rows", doc.get("photos", [])) if r.get("fov_mode", "known") == "known"]
     items = {it.key: it for side in ("train", "dev", "validation") for it in items_on_side(side) if it.key.startswith("ch1/")}
-    place_of, centres = places_of(items.values())
     params = LocalizeParams.for_photos()
-    loaded: dict = {}
     out = []
-    for row in rows:
-        it = items[row["photo"]]
-        window = place_window(*centres[place_of[it.key]])
-        if window not in loaded:
-            loaded.clear()
-            loaded[window] = Terrain(load_dem(tiles_around(it.lat, it.lon, DEM_DIR), bounds=window))
-        terrain = loaded[window]
+    for row, it, terrain in with_terrain(rows, items):
         image = load_photo(it.image_path)
         H, W = image.shape[:2]
         ext = extract_skyline(image, params.skyline_params())
@@ -102,7 +81,7 @@ def main() -> None:
         truth = np.asarray(row["truth_xy"])
         rec = {"photo": it.key, "chance": chance, "error_m": row.get("error_m", row.get("withheld_error_m")),
                "confidence": row["confidence"], "places": []}
-        for i in distinct(poses, a.places):
+        for i in distinct_places(poses, a.places):
             s = a.width / W
             K = Intrinsics(a.width, h, poses[i, 6] * s, a.width / 2, h / 2)
             t, *_ = cast_pixel_rays(terrain, Pose.from_array(poses[i, :6]), K)

@@ -19,40 +19,24 @@ import sys
 
 import numpy as np
 
-from skyrender.benchmarks.real_localize import place_window, places_of, refined_of
+from skyrender.benchmarks.real_localize import distinct_places, refined_of, with_terrain
 from skyrender.camera import Intrinsics
 from skyrender.datasets.real_photos import REPO, items_on_side
-from skyrender.dem import load_dem
-from skyrender.diagnostics.oracle import DEM_DIR, tiles_around
 from skyrender.features import extract_skyline, load_photo
 from skyrender.localizer import LocalizeParams
 from skyrender.localizer.pipeline import column_weights
 from skyrender.localizer.refinement import local_rescore, refine_pose
-from skyrender.render import Terrain
 
 ROWS = os.path.join(REPO, "experiments", "ch1", "confidence-train-rows.json")
-
-
-def distinct(poses: np.ndarray, k: int, apart_m: float = 1000.0) -> list[int]:
-    kept: list[int] = []
-    for i in np.argsort(poses[:, 7]):
-        if all(np.hypot(*(poses[i, :2] - poses[j, :2])) > apart_m for j in kept):
-            kept.append(int(i))
-        if len(kept) == k:
-            break
-    return kept
 
 
 def main(out: str, keys: list[str]) -> None:
     rows = {r["photo"]: r for r in json.load(open(ROWS))["rows"]}
     items = {it.key: it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")}
-    place_of, centres = places_of(items.values())
     params = LocalizeParams.for_photos()
     result = []
-    for key in keys:
-        it, row = items[key], rows[key]
-        dem = load_dem(tiles_around(it.lat, it.lon, DEM_DIR), bounds=place_window(*centres[place_of[key]]))
-        terrain = Terrain(dem)
+    for row, it, terrain in with_terrain([rows[key] for key in keys], items):
+        key = it.key
         image = load_photo(it.image_path)
         H, W = image.shape[:2]
         ext = extract_skyline(image, params.skyline_params())
@@ -61,7 +45,7 @@ def main(out: str, keys: list[str]) -> None:
         truth = np.asarray(row["truth_xy"])
         poses = refined_of(row)
         places = []
-        for i in distinct(poses, 4):
+        for i in distinct_places(poses, 4):
             moved, _ = local_rescore(terrain, poses[i:i + 1, :6], K, 2.0, sky, weights, 600.0, 9, 8, params.score)
             r = refine_pose(terrain, moved[0], K, 2.0, sky, weights, params=params.score, refine=params.refine,
                             give_up_px=params.give_up_sweep_px)
