@@ -166,6 +166,24 @@ def test_the_far_horizon_search_keeps_only_centres_on_ground_a_person_stands_on(
     assert standable_centres(horizons, dem, 45.0).tolist() == [0, 1, 2, 3]
 
 
+def test_a_centre_of_unknown_slope_is_kept_by_the_centre_bound_as_by_the_answer_bound():
+    """On the DEM's outer cells the slope is unknown (NaN): neither too steep nor level. The far-horizon
+    search's centre bound and the answer's bound both keep such a place (they once parted on it)."""
+    from skyrender.localizer.horizon_search import standable_centres
+    from skyrender.localizer.pipeline import standable_mask
+    from skyrender.model import Horizons
+
+    x, y = np.meshgrid(np.arange(40) * 30.0, np.arange(20)[::-1] * 30.0)
+    z = 100.0 + np.tan(np.radians(40)) * x  # a 40 deg slope everywhere
+    dem = DEM(z, Affine(30, 0, -15, 0, -30, 19 * 30.0 + 15), None, "slope")
+    xs = np.array([0.0, 600.0])  # the westmost cell centre (no neighbour west of it), and one inside
+    slopes = dem.slope_deg(xs, np.full(2, 300.0))
+    assert np.isnan(slopes[0]) and slopes[1] > 39
+    horizons = Horizons(np.c_[xs, np.full(2, 300.0), dem.ground(xs, 300.0)], np.zeros((2, 360), np.float32), 1.0)
+    assert standable_centres(horizons, dem, 30.0).tolist() == [0]
+    assert standable_mask(slopes, 30.0).tolist() == [True, False]
+
+
 def test_ground_matches_cell_values_at_centres(view_dem):
     dem = view_dem
     rng = np.random.default_rng(1)

@@ -186,11 +186,13 @@ def standable_centres(horizons: Horizons, dem, max_slope_deg: float) -> np.ndarr
     :meth:`DEM.slope_deg`): where a person can stand to take a photo; None (every centre) when
     the bound is infinite. On the 73 CH1 training-side photos the true positions' slopes on
     SRTM3 are 0-27 deg (median 12), the refined wrong candidates' median 20.5 deg, a quarter
-    of them over 29 deg (``experiments/ch1/standable/``)."""
+    of them over 29 deg (``experiments/ch1/standable/``). A centre whose slope is unknown (NaN: on
+    the DEM's outer cells) is kept, as :func:`~skyrender.localizer.pipeline.standable_mask` keeps
+    such a pose."""
     if not math.isfinite(max_slope_deg):
         return None
     c = horizons.centres
-    return np.flatnonzero(dem.slope_deg(c[:, 0], c[:, 1]) <= max_slope_deg)
+    return np.flatnonzero(~(dem.slope_deg(c[:, 0], c[:, 1]) > max_slope_deg))
 
 
 def smallest(cost: np.ndarray, k: int) -> np.ndarray:
