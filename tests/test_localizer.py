@@ -507,6 +507,53 @@ def test_photo_confidence_is_a_logistic_of_the_margin_to_the_runner_up():
 
 
 
+def test_the_part_margin_finds_a_look_alike_that_wins_on_one_part_only():
+    """part_margins: the first rendered skyline's margin over the others on each part; an answer that
+    fits both halves best is positive on both, a look-alike that wins the whole on the strength of one
+    half is negative on the other."""
+    from skyrender.localizer.verification import ScoreParams, part_margins
+
+    W = 200
+    image = np.full(W, 100.0)
+    right = image + 1.0  # 1 px off everywhere
+    other = image + np.where(np.arange(W) < W // 2, 4.0, 2.0)
+    m = part_margins(np.stack([right, other]), image, np.ones(W), 2, ScoreParams())
+    assert m.shape == (2,) and (m > 0).all()
+    assert m[0] == pytest.approx(1 - 1 / 4) and m[1] == pytest.approx(1 - 1 / 2)
+    lookalike = image + np.where(np.arange(W) < W // 2, 0.2, 2.5)  # better overall (1.35 against 1.5 px)...
+    fair = image + 1.5
+    m = part_margins(np.stack([lookalike, fair]), image, np.ones(W), 2, ScoreParams())
+    assert m[0] > 0 > m[1]  # ...but worse on the right half
+    # a part's weights alone count: zero weight on the look-alike's bad half hides it
+    m = part_margins(np.stack([lookalike, fair]), image, (np.arange(W) < W // 2).astype(float), 2, ScoreParams())
+    assert m[0] > 0
+
+
+def test_the_answers_part_margin_is_rendered_against_the_other_distinct_places(view_terrain, valley_view):
+    from skyrender.localizer.pipeline import answer_part_margin, distinct_places, margin_logistic, uses_part_margin
+    from skyrender.render import render_skylines
+
+    pose, K = valley_view
+    p = pose.array()
+    sky = render_skylines(view_terrain, p, K)
+    away = p.copy()
+    away[:2] += 3000.0  # another place, 4.2 km off
+    near = p.copy()
+    near[0] += 300.0  # the answer's own place, within 1 km: not a rival
+    refined = np.array([[*p, K.f_px, 0.1], [*near, K.f_px, 0.2], [*away, K.f_px, 3.0]])
+    assert distinct_places(refined, 4, 1000.0) == [0, 2]
+    h = answer_part_margin(view_terrain, refined, sky, np.ones(K.width), K.height, 1000.0, LocalizeParams().score)
+    assert 0.5 < h <= 1.0  # the answer renders the photo's skyline; the other place fits neither half
+    assert answer_part_margin(view_terrain, refined[:2], sky, np.ones(K.width), K.height, 1000.0,
+                              LocalizeParams().score) == 1.0  # no other place: as the margin without a runner-up
+    # the four-term logistic: (a, b, 0, d) adds d h; with d = 0 it is the two-term one
+    assert margin_logistic(0.3, (-2.0, 10.0, 0.0, 5.0), 0.0, -0.2) == pytest.approx(1 / (1 + np.exp(-(-2 + 3 - 1))))
+    assert margin_logistic(0.3, (-2.0, 10.0, 0.0, 0.0), 0.0, 0.7) == pytest.approx(margin_logistic(0.3, (-2.0, 10.0)))
+    assert uses_part_margin((-2.0, 10.0, 0.0, 5.0)) and not uses_part_margin((-2.0, 10.0))
+    photo = LocalizeParams.for_photos()
+    assert uses_part_margin(photo.margin_logit) == (len(photo.margin_logit) > 3 and photo.margin_logit[3] != 0)
+
+
 def test_a_benchmark_run_is_rescored_under_another_confidence_without_moving_a_pose():
     from skyrender.benchmarks.real_localize import rescore
 
@@ -592,6 +639,13 @@ def test_the_photo_confidence_fit_takes_the_runner_up_distance_that_keeps_most_r
     assert b > 0 and 0.5 <= fit["min_confidence"] <= 1.0
     assert set(fit["leave_place_out"]) == {"margin", "margin+score"}
     assert len(fit_confidence(rows, choices_m=(3000.0,), score_term=True)["logit"]) == 3
+    # the part margin in the place of the score term: right answers win both halves, wrong ones lose one
+    for r in rows:
+        r["part_margin"] = 0.3 if r["photo"].startswith("r") else -0.1
+    fit = fit_confidence(rows, choices_m=(1000.0,), part_term=True)
+    a, b, c, d = fit["logit"]
+    assert c == 0.0 and d > 0 and set(fit["leave_place_out"]) == {"margin", "margin+part"}
+    assert fit["kept_by_runner_up_m"]["1000"] == 12  # the near rivals no longer hold the right answers back
 
 
 def test_the_score_term_answers_right_answers_the_margin_alone_cannot_tell_from_wrong_ones():

@@ -28,6 +28,7 @@ import numpy as np
 from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
 from ..diagnostics.oracle import DEM_DIR, tiles_around
 from ..evaluate import git_commit, position_errors
+from ..localizer.pipeline import distinct_places  # noqa: F401  (the probes in experiments/ch1 take it from here)
 
 HALF_LAT, HALF_LON = 0.6, 0.7  # degrees either side of the place's centre
 RECALL_M = (100.0, 250.0, 1000.0)
@@ -151,7 +152,8 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
             row = {"photo": it.key, "fov_mode": mode, "status": result.status, "confidence": result.confidence,
                    "seconds": seconds, "model_seconds": model_seconds, "window": window, "width": image.shape[1],
                    "stage_seconds": result.stats.to_dict()["seconds"], "best_score": result.stats.best_score,
-                   "runner_up_score": result.stats.runner_up_score, "truth_xy": [tx, ty],
+                   "runner_up_score": result.stats.runner_up_score, "part_margin": result.stats.part_margin,
+                   "truth_xy": [tx, ty],
                    "refined_poses": [list(r) for r in result.stats.refined_poses],
                    "refined_slopes": list(result.stats.refined_slopes)}
             if math.isfinite(params.max_answer_slope_deg):  # the answer was chosen among poses on such ground
@@ -214,16 +216,24 @@ def refined_of(row: dict, max_slope_deg: float | None = None) -> np.ndarray:
     return poses[standable_mask(slopes, bound)] if len(slopes) == len(poses) and len(poses) else poses
 
 
-def distinct_places(poses: np.ndarray, k: int | None = None, apart_m: float = 1000.0) -> list[int]:
-    """Indices of refined poses (K, 8: ..., score last), best score first, each farther than ``apart_m``
-    (m) from every one taken before it: the distinct places a row's answer is chosen among; at most ``k``."""
-    kept: list[int] = []
-    for i in np.argsort(poses[:, 7], kind="stable"):
-        if k is not None and len(kept) == k:
-            break
-        if all(np.hypot(*(poses[i, :2] - poses[j, :2])) > apart_m for j in kept):
-            kept.append(int(i))
-    return kept
+def with_part_margins(rows: list[dict], items: dict, params=None) -> list[dict]:
+    """``rows``, each given a ``part_margin`` where it has refined poses but no part margin: the
+    photo-confidence cue :func:`~skyrender.localizer.pipeline.answer_part_margin` of its refined poses
+    against the photo's skyline as the photo preset (``params``) extracts it; rows of runs at this code
+    carry theirs. ``items`` maps photo keys to items (every photo of their places; :func:`with_terrain`)."""
+    from ..features import extract_skyline, load_photo
+    from ..localizer import LocalizeParams
+    from ..localizer.pipeline import answer_part_margin, column_weights
+
+    params = params or LocalizeParams.for_photos()
+    missing = [r for r in rows if r.get("part_margin") is None and len(refined_of(r))]
+    for row, it, terrain in with_terrain(missing, items):
+        image = load_photo(it.image_path)
+        ext = extract_skyline(image, params.skyline_params())
+        row["part_margin"] = answer_part_margin(terrain, refined_of(row), ext.skyline.astype(np.float64),
+                                                column_weights(ext.confidence, params.confidence_power), image.shape[0],
+                                                params.runner_up_m or params.same_pose_m, params.score)
+    return rows
 
 
 def margin_of(row: dict, runner_up_m: float = 1000.0) -> float:
@@ -257,8 +267,13 @@ def log_best_of(row: dict) -> float:
 
 
 def logit_text(logit) -> str:
-    """A photo-confidence logit as a formula: a + b m (+ c ln s)."""
-    return f"{logit[0]:.3f} + {logit[1]:.3f} m" + (f" {logit[2]:+.3f} ln s" if len(logit) > 2 else "")
+    """A photo-confidence logit as a formula: a + b m (+ c ln s) (+ d h, h the smallest part margin)."""
+    text = f"{logit[0]:.3f} + {logit[1]:.3f} m"
+    if len(logit) > 2 and logit[2] != 0.0:
+        text += f" {logit[2]:+.3f} ln s"
+    if len(logit) > 3 and logit[3] != 0.0:
+        text += f" {logit[3]:+.3f} h"
+    return text
 
 
 def rescore(rows: list[dict], logit: tuple, threshold: float, runner_up_m: float = 1000.0,
@@ -270,15 +285,19 @@ def rescore(rows: list[dict], logit: tuple, threshold: float, runner_up_m: float
     the poses do not depend on it, so an answer stays or becomes an abstention (its error kept as
     ``withheld_error_m``), and an answer an earlier rescore withheld is given again. An abstention of
     the run itself that the new confidence would answer needs a new run (its pose was not kept):
-    ValueError."""
-    from ..localizer.pipeline import margin_logistic
+    ValueError. A ``logit`` with a part-margin term reads each row's ``part_margin``
+    (:func:`with_part_margins`); a row with poses but none: ValueError."""
+    from ..localizer.pipeline import margin_logistic, uses_part_margin
 
     out = []
     for r in rows:
         r = dict(r)
         margin = margin_of(r, runner_up_m)
         if np.isfinite(margin):
-            r["confidence"] = float(margin_logistic(margin, logit, log_best_of(r)))
+            part = r.get("part_margin")
+            if part is None and uses_part_margin(logit):
+                raise ValueError(f"{r['photo']}: no part margin (real_localize.with_part_margins)")
+            r["confidence"] = float(margin_logistic(margin, logit, log_best_of(r), part or 0.0))
         needed = threshold_fov_unknown if r.get("fov_mode") == "unknown" and threshold_fov_unknown is not None else threshold
         if r["status"] == "localized" and r["confidence"] < needed:
             r["status"], r["withheld_error_m"] = "abstained", r.pop("error_m")
@@ -328,6 +347,8 @@ def main(argv=None) -> int:
     parser.add_argument("--retable", action="store_true", help="rewrite the text table from the run's JSON")
     parser.add_argument("--rescore", action="store_true", help="with --retable: apply the current photo confidence "
                         "fit and threshold to the run's rows (their poses do not depend on it)")
+    parser.add_argument("--fit", default=None, metavar="JSON",
+                        help="with --rescore: another photo-confidence fit (a localize_fit output) instead of the shipped one")
     args = parser.parse_args(argv)
     if not os.path.isdir(DEFAULT_PHOTOS):
         print(f"no photos at {DEFAULT_PHOTOS}")
@@ -368,17 +389,31 @@ def main(argv=None) -> int:
                 PHOTO_MIN_CONFIDENCE,
                 PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN,
                 PHOTO_RUNNER_UP_M,
+                uses_part_margin,
             )
 
-            if any("refined_poses" not in r for r in report["photos"]) and PHOTO_RUNNER_UP_M != 1000.0:
-                print(f"--rescore: {name} keeps no refined poses, so its runner-ups beyond {PHOTO_RUNNER_UP_M:.0f} m "
+            logit, threshold, runner_up_m, threshold_unknown = (PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE,
+                                                                 PHOTO_RUNNER_UP_M, PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN)
+            if args.fit:
+                try:
+                    with open(args.fit) as f:
+                        fit = json.load(f)
+                    logit, threshold = tuple(float(v) for v in fit["logit"]), float(fit["min_confidence"])
+                    runner_up_m = float(fit.get("runner_up_m", 1000.0))
+                    threshold_unknown = float(fit.get("min_confidence_fov_unknown", threshold))
+                except (OSError, ValueError, KeyError, TypeError) as exc:
+                    print(f"--fit: cannot read a photo-confidence fit from {args.fit}: {exc}")
+                    return 2
+            if any("refined_poses" not in r for r in report["photos"]) and runner_up_m != 1000.0:
+                print(f"--rescore: {name} keeps no refined poses, so its runner-ups beyond {runner_up_m:.0f} m "
                       "are unknown; run the benchmark again")
                 return 2
-            report["photos"] = rescore(report["photos"], PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE, PHOTO_RUNNER_UP_M,
-                                       PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN)
-            report["rescored"] = {"at": git_commit(), "logit": list(PHOTO_MARGIN_LOGIT),
-                                  "min_confidence": PHOTO_MIN_CONFIDENCE, "runner_up_m": PHOTO_RUNNER_UP_M,
-                                  "min_confidence_fov_unknown": PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN}
+            if uses_part_margin(logit):  # rows of runs before the part margin: rendered now
+                with_part_margins(report["photos"], {it.key: it for it in items_on_side(args.side) if it.lat is not None})
+            report["photos"] = rescore(report["photos"], logit, threshold, runner_up_m, threshold_unknown)
+            report["rescored"] = {"at": git_commit(), "logit": list(logit), "min_confidence": threshold,
+                                  "runner_up_m": runner_up_m, "min_confidence_fov_unknown": threshold_unknown,
+                                  **({"fit": os.path.relpath(args.fit, REPO)} if args.fit else {})}
     else:
         # rows are appended to <name>.rows.jsonl as they come, so an interrupted run resumes
         os.makedirs(args.out, exist_ok=True)

@@ -48,7 +48,7 @@ from .horizon_search import HorizonSearchParams, centre_indices, horizon_poses, 
 from .hypotheses import Hypotheses, generate_hypotheses
 from .pose_solver import solve_poses
 from .refinement import Refined, RefineParams, WeakSweepParams, local_rescore, refine_pose, weak_axis_sweep
-from .verification import ScoreParams, verify_poses
+from .verification import ScoreParams, part_margins, verify_poses
 
 #: Focal lengths tried when the field of view is unknown (horizontal fov, degrees).
 FOV_CANDIDATES = (30.0, 40.0, 50.0, 60.0, 70.0)
@@ -59,8 +59,9 @@ PHOTO_FOV_CANDIDATES = (35.0, 50.0, 65.0)
 #: on a 35 mm frame sees 10.3 deg, an 85 mm one 23.9 deg; a third of CH1's validation photos, 10.6-28 deg)
 PHOTO_TELEPHOTO_FOVS = (14.0, 21.0)
 PHOTO_TELEPHOTO_STEPS = (1.5 ** 0.5 - 1.0, 1.5 ** 0.25 - 1.0)
-#: The photo confidence P(within 1 km) = logistic(a + b * margin): (a, b) fitted on the CH1
-#: training side by ``python -m skyrender.training.localize_fit``, which writes this file.
+#: The photo confidence P(within 1 km) = logistic(a + b * margin): (a, b) fitted on the CH1 training side by
+#: ``python -m skyrender.training.localize_fit``, which writes this file (with ``--part-margin``, an option:
+#: (a, b, 0, d), d for the answer's smallest part margin, :func:`answer_part_margin`).
 PHOTO_CONFIDENCE_FILE = os.path.join(os.path.dirname(__file__), "photo_confidence.json")
 
 
@@ -77,7 +78,7 @@ def _photo_margin_logit(fit: dict) -> tuple[float, ...]:
         logit = tuple(float(v) for v in fit["logit"])
     except (KeyError, TypeError, ValueError):
         return 0.0, 1.0
-    return logit if len(logit) in (2, 3) else (0.0, 1.0)
+    return logit if len(logit) in (2, 3, 4) else (0.0, 1.0)
 
 
 _FIT = _photo_confidence_fit()
@@ -211,7 +212,9 @@ class LocalizeParams:
         wrong poses overlap (1.1-2.4 vs 1.1-4.0 px on CH1 training photos), but the
         margin to the best pose farther away (:data:`PHOTO_RUNNER_UP_M`) separates them, so the
         confidence is a logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`;
-        a term of the best score was tried and did not hold on places left out: ``localize_fit``).
+        a term of the best score was tried and did not hold on places left out, and one of the answer's
+        smallest margin on either half of the skyline, :func:`answer_part_margin`, kept more right
+        training answers but answered a validation photo 54 km wrong: ``localize_fit``).
         The camera roll stays within :data:`PHOTO_MAX_SWING_DEG` in the verification's alignment
         and the refinement: wrong places fitted with 10-50 deg of it (held in the far-horizon
         fit too, ``HorizonSearchParams.max_swing_deg``, it lost a confident answer on the CH1 dev photos)."""
@@ -269,6 +272,7 @@ class LocalizeStats:
     refined: int = 0
     best_score: float | None = None  # the winner's refined score (px)...
     runner_up_score: float | None = None  # ...and the runner-up's (the confidence's margin)
+    part_margin: float | None = None  # the answer's smallest margin on a part of the skyline (:func:`answer_part_margin`)
     seconds: dict = field(default_factory=dict)
     peak_mb: dict = field(default_factory=dict)  # stage -> the process's peak RSS (MB) when it first reached it
     # the three-point search chunk by chunk: hypotheses solved, best verified and refined scores so far
@@ -299,7 +303,7 @@ class LocalizeStats:
         return {"generated": self.generated, "evaluated": self.evaluated, "rejected": dict(self.rejected),
                 "rejected_share": {k: (v / self.evaluated if self.evaluated else 0.0) for k, v in self.rejected.items()},
                 "verified": self.verified, "horizon_poses": self.horizon_poses, "refined": self.refined,
-                "best_score": self.best_score, "runner_up_score": self.runner_up_score,
+                "best_score": self.best_score, "runner_up_score": self.runner_up_score, "part_margin": self.part_margin,
                 "seconds": {k: round(v, 4) for k, v in self.seconds.items()},
                 "peak_mb": {k: round(v, 1) for k, v in self.peak_mb.items()}, "rounds": list(self.rounds),
                 "refined_poses": [list(r) for r in self.refined_poses], "refined_slopes": list(self.refined_slopes),
@@ -458,20 +462,66 @@ def log_score(score_px, width_px: float = SCORE_REFERENCE_WIDTH_PX):
     return np.log(np.maximum(np.asarray(score_px, np.float64) * SCORE_REFERENCE_WIDTH_PX / width_px, 1e-3))
 
 
-def margin_logistic(margin, logit: tuple, log_best=0.0):
-    """P(right) = 1 / (1 + exp(-(a + b m + c l))) of the margin m and the log best score l
-    (:func:`log_score`; scalars or arrays) for ``logit`` = (a, b, c), or (a, b): no score term."""
-    a, b, c = (*logit, 0.0)[:3]
-    return 1.0 / (1.0 + np.exp(-(a + b * np.asarray(margin, np.float64) + c * np.asarray(log_best, np.float64))))
+def margin_logistic(margin, logit: tuple, log_best=0.0, part_margin=0.0):
+    """P(right) = 1 / (1 + exp(-(a + b m + c l + d h))) of the margin m, the log best score l
+    (:func:`log_score`) and the smallest part margin h (:func:`answer_part_margin`; scalars or
+    arrays) for ``logit`` = (a, b, c, d), or (a, b, c) or (a, b): the missing terms 0."""
+    a, b, c, d = (*logit, 0.0, 0.0)[:4]
+    return 1.0 / (1.0 + np.exp(-(a + b * np.asarray(margin, np.float64) + c * np.asarray(log_best, np.float64)
+                                 + d * np.asarray(part_margin, np.float64))))
+
+
+def uses_part_margin(logit: tuple) -> bool:
+    """Whether a photo-confidence ``logit`` has a part-margin term (then the answer's part margin is worth rendering)."""
+    return len(logit) > 3 and logit[3] != 0.0
 
 
 def margin_confidence(best_score: float, runner_up_score: float, logit: tuple,
-                      width_px: float = SCORE_REFERENCE_WIDTH_PX) -> float:
+                      width_px: float = SCORE_REFERENCE_WIDTH_PX, part_margin: float = 0.0) -> float:
     """P(right) from the relative margin m = 1 - best / runner-up (scores in px of a photo
-    ``width_px`` wide, lower is better) and, with a three-term ``logit``, the best score itself:
-    :func:`margin_logistic`; no runner-up is m = 1."""
+    ``width_px`` wide, lower is better) and, with a three- or four-term ``logit``, the best score itself
+    and the answer's smallest part margin: :func:`margin_logistic`; no runner-up is m = 1."""
     margin = 1.0 - best_score / runner_up_score if runner_up_score > 0 and math.isfinite(runner_up_score) else 1.0
-    return float(margin_logistic(margin, logit, log_score(best_score, width_px)))
+    return float(margin_logistic(margin, logit, log_score(best_score, width_px), part_margin))
+
+
+#: The photo confidence's part margin (an option, ``localize_fit --part-margin``): the skyline in this many
+#: equal parts, the answer against the best PART_PLACES - 1 other distinct places (each farther than the
+#: runner-up distance from those before it). On the 73 CH1 training-side photos (``experiments/ch1/split-half/``)
+#: halves kept 36 right answers above the fitted threshold against the margin's 32 (thirds 32), leave place out
+#: 39 right / 3 wrong against 39 / 5; on the validation side, rescored once, 33 answers against 30, one of them
+#: ``dsc05274`` 54 km off at 0.92 (``experiments/ch1/part-margin/``): not the shipped fit.
+PART_COUNT = 2
+PART_PLACES = 4
+
+
+def distinct_places(poses: np.ndarray, k: int | None = None, apart_m: float = 1000.0) -> list[int]:
+    """Indices of refined poses (K, 8: ..., score last), best score first, each farther than ``apart_m``
+    (m) from every one taken before it: the distinct places a row's answer is chosen among; at most ``k``."""
+    kept: list[int] = []
+    for i in np.argsort(poses[:, 7], kind="stable"):
+        if k is not None and len(kept) == k:
+            break
+        if all(np.hypot(*(poses[i, :2] - poses[j, :2])) > apart_m for j in kept):
+            kept.append(int(i))
+    return kept
+
+
+def answer_part_margin(terrain: Terrain, refined: np.ndarray, sky: np.ndarray, weights: np.ndarray, height_px: int,
+                       apart_m: float, params: ScoreParams) -> float:
+    """The answer's smallest margin over the other places on :data:`PART_COUNT` parts of the skyline
+    (:func:`~.verification.part_margins`): refined poses (K, 8: x, y, z, pan, tilt, swing, f_px, score),
+    the answer the best-scoring; the best :data:`PART_PLACES` distinct places (:func:`distinct_places`,
+    ``apart_m`` apart) rendered once. 1 where no other place was refined (as the margin)."""
+    places = distinct_places(refined, PART_PLACES, apart_m)
+    if len(places) < 2:
+        return 1.0
+    P = refined[places]
+    W = len(sky)
+    k = np.column_stack([P[:, 6], np.full(len(P), W / 2.0), np.full(len(P), height_px / 2.0)])
+    rendered = render_skylines(terrain, P[:, :6], Intrinsics(W, height_px, P[0, 6], W / 2.0, height_px / 2.0),
+                               per_pose_intrinsics=k)
+    return float(part_margins(rendered, sky, weights, PART_COUNT, params).min())
 
 
 @dataclass
@@ -849,8 +899,15 @@ def _decide(search: _Search, accepted: _Candidate | None, t_start: float) -> Loc
         runner_up = others[0].refined if others else None
         stats.best_score, stats.runner_up_score = best.refined.score, runner_up.score if runner_up else None
         if params.confidence_model == "margin":
+            part = 0.0
+            if uses_part_margin(params.margin_logit) and best is not accepted:
+                refined = np.array([(*c.refined.pose, c.refined.f_px, c.refined.score) for c in done])
+                with stats.timed("part_margin"):
+                    part = answer_part_margin(search.terrain, refined, search.sky, search.weights, H,
+                                              params.runner_up_m or params.same_pose_m, params.score)
+                stats.part_margin = part
             confidence = margin_confidence(best.refined.score, runner_up.score if runner_up else np.inf,
-                                           params.margin_logit, W)
+                                           params.margin_logit, W, part)
         else:
             confidence = confidence_of(best.refined, runner_up)
     if best is None or confidence < params.abstain_below(search.fov is None):

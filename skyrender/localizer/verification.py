@@ -83,6 +83,20 @@ def score_skylines(rendered: np.ndarray, image: np.ndarray, weights: np.ndarray,
     return score, agreement
 
 
+def part_margins(rendered: np.ndarray, image: np.ndarray, weights: np.ndarray, parts: int = 2,
+                 params: ScoreParams = ScoreParams()) -> np.ndarray:
+    """(parts,) the first rendered skyline's margin over the others on each of ``parts`` equal
+    stretches of columns, left to right: 1 - its score / the best other's score
+    (:func:`score_skylines` with the other columns' weights set to 0), rendered (P >= 2, W).
+    Positive where the first fits that stretch better than every other; a look-alike that wins
+    the whole skyline on the strength of one stretch has a negative margin on another."""
+    W = rendered.shape[1]
+    stretch = np.minimum((np.arange(W) * parts) // W, parts - 1)
+    scores = np.column_stack([score_skylines(rendered, image, weights * (stretch == k), params)[0]
+                              for k in range(parts)])  # (P, parts)
+    return 1.0 - scores[0] / np.maximum(scores[1:].min(axis=0), 1e-9)
+
+
 def trust_of_distance(distance: np.ndarray, params: ScoreParams = ScoreParams()) -> np.ndarray:
     """How far a rendered skyline column counts, from the distance (m) of its terrain:
     0 nearer than ``trust_near_m``, 1 beyond ``trust_far_m``, linear between."""

@@ -12,7 +12,14 @@ set (:func:`abstain_threshold`). ``--score-term`` adds the log best score s (px 
 one, margin for margin, on the training photos, but how well any answer fits depends on the place,
 and judged a place at a time (:func:`leave_place_out`, printed and written with every fit) it
 answers 40 right and 5 wrong against the margin's 39 and 5; on the validation side, run once, it
-answered 3 photos 2-54 km wrong (``experiments/ch1/score-term/``). The runner-up is the best refined
+answered 3 photos 2-54 km wrong (``experiments/ch1/score-term/``). ``--part-margin`` adds the
+answer's smallest part margin h (:func:`~skyrender.localizer.pipeline.answer_part_margin`: its margin
+over the other refined places on each half of the skyline): P = 1 / (1 + exp(-(a + b m + d h))). A
+look-alike that wins the whole skyline on one half loses on the other; on the training photos it kept
+36 right answers above the threshold against the margin's 32, leave place out 39 right / 3 wrong
+against 39 / 5 (``experiments/ch1/split-half/``), but on the validation side, rescored once, it
+answered 3 more photos, one of them 54 km wrong at 0.92 (``experiments/ch1/part-margin/``): an
+option, not the shipped fit. The runner-up is the best refined
 pose farther than D from the answer; D is chosen from :data:`RUNNER_UP_CHOICES_M` as the one whose
 fit keeps the most right answers above its threshold (a runner-up 1-3 km away often sees the same
 skyline from the same valley, and is no evidence against the answer; ``--runner-up-choices``, not
@@ -36,11 +43,11 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import minimize
 
-from ..benchmarks.real_localize import log_best_of, logit_text, margin_of, model_overrides, places_of, run
+from ..benchmarks.real_localize import log_best_of, logit_text, margin_of, model_overrides, places_of, run, with_part_margins
 from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
 from ..evaluate import git_commit
 from ..localizer import LocalizeParams
-from ..localizer.pipeline import PHOTO_CONFIDENCE_FILE, margin_logistic
+from ..localizer.pipeline import PHOTO_CONFIDENCE_FILE, margin_logistic, uses_part_margin
 
 RIGHT_M = 1000.0
 #: The runner-up distances tried by ``--runner-up-choices`` (m): the one keeping most right training
@@ -86,11 +93,13 @@ def rows_right(rows: list[dict]) -> np.ndarray:
     return np.array([(r.get("error_m") if r.get("error_m") is not None else np.inf) <= RIGHT_M for r in rows])
 
 
-def confidences(margin: np.ndarray, log_best: np.ndarray, logit: tuple) -> np.ndarray:
-    """The photo confidence of each ``margin`` and log best score (:func:`real_localize.log_best_of`)
-    under ``logit`` (a, b) or (a, b, c) (NaN: no pose, confidence 0)."""
-    ok = np.isfinite(margin) & np.isfinite(log_best)
-    return np.where(ok, margin_logistic(np.nan_to_num(margin), logit, np.nan_to_num(log_best)), 0.0)
+def confidences(margin: np.ndarray, log_best: np.ndarray, logit: tuple, part: np.ndarray | None = None) -> np.ndarray:
+    """The photo confidence of each ``margin``, log best score (:func:`real_localize.log_best_of`) and
+    part margin (``part``; None: 0) under ``logit`` (a, b), (a, b, c) or (a, b, c, d) (NaN: no pose,
+    confidence 0)."""
+    part = np.zeros(len(margin)) if part is None else np.asarray(part, np.float64)
+    ok = np.isfinite(margin) & np.isfinite(log_best) & np.isfinite(part)
+    return np.where(ok, margin_logistic(np.nan_to_num(margin), logit, np.nan_to_num(log_best), np.nan_to_num(part)), 0.0)
 
 
 def fit_at(margin: np.ndarray, log_best: np.ndarray, right: np.ndarray, score_term: bool = False) -> dict:
@@ -119,28 +128,43 @@ def leave_place_out(margin: np.ndarray, log_best: np.ndarray, right: np.ndarray,
     return {"right": int(np.sum(answered & right)), "wrong": int(np.sum(answered & ~right)), "of": int(right.sum())}
 
 
-def fit_confidence(rows: list[dict], choices_m=RUNNER_UP_CHOICES_M, score_term: bool = False) -> dict:
+def part_margins_of(rows: list[dict]) -> np.ndarray:
+    """(n,) each row's ``part_margin`` (NaN: none; :func:`real_localize.with_part_margins` gives them)."""
+    return np.array([np.nan if r.get("part_margin") is None else float(r["part_margin"]) for r in rows])
+
+
+def fit_confidence(rows: list[dict], choices_m=RUNNER_UP_CHOICES_M, score_term: bool = False,
+                   part_term: bool = False) -> dict:
     """The photo confidence fitted on benchmark ``rows`` (:func:`real_localize.run`): for each
     runner-up distance in ``choices_m`` (m) the logistic of the margin (and, with ``score_term``, of
-    the log best score) and its threshold (:func:`fit_at`); the distance whose fit keeps the most
+    the log best score; with ``part_term``, of the answer's smallest part margin, the rows'
+    ``part_margin``) and its threshold (:func:`fit_at`); the distance whose fit keeps the most
     right answers above its threshold is taken (ties: the nearest). With it, the leave-place-out
-    counts of the margin alone and of margin and score (:func:`leave_place_out`, places from
-    ``experiments/photos/split.json``). Returns what ``photo_confidence.json`` holds, less the commits."""
+    counts of the margin alone and of margin and the second cue (:func:`leave_place_out`, places from
+    ``experiments/photos/split.json``). Returns what ``photo_confidence.json`` holds, less the commits;
+    a part-margin fit's logit is written (a, b, 0, d), as :func:`~skyrender.localizer.pipeline.margin_logistic` reads it."""
     right = rows_right(rows)
     log_best = np.array([log_best_of(r) for r in rows])
+    second = part_margins_of(rows) if part_term else log_best
     place_of, _ = places_of([])
     places = np.array([place_of.get(r["photo"], r["photo"]) for r in rows])
-    fits = {d: fit_at(np.array([margin_of(r, d) for r in rows]), log_best, right, score_term) for d in choices_m}
+    fits = {d: fit_at(np.array([margin_of(r, d) for r in rows]), second, right, score_term or part_term)
+            for d in choices_m}
     kept = {d: int(np.sum((fit["confidence"] >= fit["threshold"]) & right)) for d, fit in fits.items()}
     runner_up_m = max(choices_m, key=lambda d: (kept[d], -d))
     fit = fits[runner_up_m]
-    return {"logit": list(fit["logit"]), "min_confidence": fit["threshold"], "runner_up_m": float(runner_up_m),
+    logit = list(fit["logit"])
+    if part_term:
+        logit = [logit[0], logit[1], 0.0, logit[2]]
+    cue = "part" if part_term else "score"
+    return {"logit": logit, "min_confidence": fit["threshold"], "runner_up_m": float(runner_up_m),
             "right_m": RIGHT_M, "photos": len(rows), "right": int(right.sum()),
             "kept_by_runner_up_m": {str(int(d)): kept[d] for d in choices_m},
-            "leave_place_out": {name: leave_place_out(fit["margin"], log_best, right, places, term)
-                                for name, term in (("margin", False), ("margin+score", True))},
-            "rows": [{"photo": r["photo"], "margin": m, "log_best": lb, "error_m": r.get("error_m"),
-                      "seconds": r["seconds"]} for r, m, lb in zip(rows, fit["margin"], log_best)]}
+            "leave_place_out": {name: leave_place_out(fit["margin"], second, right, places, term)
+                                for name, term in (("margin", False), (f"margin+{cue}", True))},
+            "rows": [{"photo": r["photo"], "margin": m, "log_best": lb, "part_margin": r.get("part_margin"),
+                      "error_m": r.get("error_m"), "seconds": r["seconds"]}
+                     for r, m, lb in zip(rows, fit["margin"], log_best)]}
 
 
 def fov_unknown_threshold(rows: list[dict], logit: tuple, runner_up_m: float, floor: float) -> float:
@@ -149,7 +173,8 @@ def fov_unknown_threshold(rows: list[dict], logit: tuple, runner_up_m: float, fl
     (the fov-known threshold). A fov-unknown search tries 7 focal lengths, and its wrong answers
     can win by margins the fov-known ones never do."""
     confidence = confidences(np.array([margin_of(r, runner_up_m) for r in rows]),
-                             np.array([log_best_of(r) for r in rows]), logit)
+                             np.array([log_best_of(r) for r in rows]), logit,
+                             part_margins_of(rows) if uses_part_margin(logit) else None)
     return max(floor, abstain_threshold(confidence, rows_right(rows)))
 
 
@@ -170,6 +195,9 @@ def main(argv=None) -> int:
                         f"on the training photos (default: {RUNNER_UP_M:.0f} m; see RUNNER_UP_CHOICES_M)")
     parser.add_argument("--score-term", action="store_true",
                         help="fit the log best score too (a probe, not the default: it did not hold on places left out)")
+    parser.add_argument("--part-margin", action="store_true",
+                        help="fit the answer's smallest part margin too (pipeline.answer_part_margin; rendered for rows "
+                        "without one, ~2 s a photo); the shipped fit (make fit-photo-confidence)")
     parser.add_argument("--fov-unknown-rows", default=None, metavar="JSON", nargs="+",
                         help="`real_localize --side train --fov unknown --no-abstain` runs' JSON: the threshold with "
                         "the fov unknown is set on all their rows together (fov_unknown_threshold)")
@@ -218,7 +246,13 @@ def main(argv=None) -> int:
         with open(args.rows, "w") as f:
             json.dump({"commit": rows_commit, "rows": rows}, f)
     choices = RUNNER_UP_CHOICES_M if args.runner_up_choices else (RUNNER_UP_M,)
-    out = {"commit": git_commit(), "localized_at": rows_commit, **fit_confidence(rows, choices, args.score_term)}
+    if args.part_margin:  # rows of runs before the part margin have none: rendered here (the places at RUNNER_UP_M)
+        items = {it.key: it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")}
+        with_part_margins(rows, items)
+        if unknown_rows:
+            with_part_margins(unknown_rows, items)
+    out = {"commit": git_commit(), "localized_at": rows_commit,
+           **fit_confidence(rows, choices, args.score_term, args.part_margin)}
     if unknown_rows:
         out["min_confidence_fov_unknown"] = fov_unknown_threshold(unknown_rows, out["logit"], out["runner_up_m"],
                                                                   out["min_confidence"])
