@@ -328,6 +328,31 @@ def test_bench_real_retables_a_run_of_one_fov_mode(tmp_path):
     assert "\nknown fov" not in text
 
 
+def test_bench_real_rescores_a_run_under_another_fit_and_refuses_a_bad_one(tmp_path, capsys):
+    """``--retable --rescore --fit FIT.json``: the rows judged by that fit's logit and thresholds (the
+    poses kept), recorded in the report; a fit file that is not one: a one-line message and exit 2."""
+    from skyrender.benchmarks.real_localize import main
+
+    data_path("photos", "ch1")
+    poses = [[0, 0, 2, 0, 0, 0, 800, 1.0], [5000, 0, 2, 0, 0, 0, 800, 2.0]]  # margin 0.5
+    rows = [{"photo": "ch1/p0", "fov_mode": "known", "status": "localized", "confidence": 0.5, "seconds": 10.0,
+             "error_m": 150.0, "refined_poses": poses, "best_score": 1.0, "runner_up_score": 2.0}]
+    with open(tmp_path / "bench-real-validation-t.json", "w") as f:
+        json.dump({"commit": "abc", "cpus": 2, "side": "validation", "photos": rows}, f)
+    fit = tmp_path / "fit.json"
+    fit.write_text(json.dumps({"logit": [-3.0, 2.0], "min_confidence": 0.9, "runner_up_m": 1000.0}))
+    args = ["--side", "validation", "--tag", "t", "--out", str(tmp_path), "--retable", "--rescore", "--fit", str(fit)]
+    assert main(args) == 0
+    report = json.loads((tmp_path / "bench-real-validation-t.json").read_text())
+    assert report["photos"][0]["status"] == "abstained"  # logistic(-3 + 2 * 0.5) = 0.12 < 0.9
+    assert report["photos"][0]["withheld_error_m"] == 150.0
+    assert report["rescored"]["logit"] == [-3.0, 2.0] and report["rescored"]["min_confidence"] == 0.9
+    fit.write_text("{}")
+    assert main(args) == 2
+    out = capsys.readouterr().out.strip().splitlines()
+    assert out[-1].startswith("--fit: cannot read a photo-confidence fit from")
+
+
 def test_a_benchmark_run_is_summarised_place_by_place():
     """Each run's table says, per place of the split, how many photos ended within 250 m and 1 km,
     withheld answers included: a change that helps one place only shows as such."""
