@@ -76,6 +76,20 @@ def load_place(lat: float, lon: float, model_params=None):
     return dem, terrain, cached_model(dem, model_params or ModelParams.for_photos(), terrain=terrain), window
 
 
+def with_place(items, model_params=None):
+    """(n, item, (dem, terrain, model)) for each of ``items`` in order: each place's
+    :func:`load_place` (``model_params``: the model's, default the photo preset's) done when its
+    first photo comes, one place in memory at a time (items come place by place)."""
+    place_of, centres = places_of(items)
+    loaded: dict = {}
+    for n, it in enumerate(items):
+        place = place_of[it.key]
+        if place not in loaded:
+            loaded.clear()
+            loaded[place] = load_place(*centres[place], model_params)[:3]
+        yield n, it, loaded[place]
+
+
 def with_terrain(rows: list[dict], items: dict):
     """(row, item, terrain) for each of ``rows``, ``items`` mapping photo keys to their items (every photo of
     their places): each place's terrain (:func:`place_dem`) loaded when its first row comes, one place in

@@ -41,7 +41,7 @@ def first_rank(order: np.ndarray, distance: np.ndarray, radius: float) -> int | 
 
 def probe(items, true_skyline: bool = False, progress: bool = True, params=None, rerank: int = 0,
           model_params=None) -> list[dict]:
-    from ..benchmarks.real_localize import load_place, places_of
+    from ..benchmarks.real_localize import with_place
     from ..camera import Intrinsics
     from ..features import extract_skyline, load_photo
     from ..localizer import LocalizeParams
@@ -50,14 +50,8 @@ def probe(items, true_skyline: bool = False, progress: bool = True, params=None,
     from ..localizer.verification import verify_poses
 
     params = params or LocalizeParams.for_photos()
-    place_of, centres = places_of(items)
-    rows, loaded = [], {}
-    for n, it in enumerate(items):
-        place = place_of[it.key]
-        if place not in loaded:
-            loaded.clear()
-            loaded[place] = load_place(*centres[place], model_params)[:3]
-        dem, terrain, model = loaded[place]
+    rows = []
+    for n, it, (dem, terrain, model) in with_place(items, model_params):
         t = time.perf_counter()
         image = load_photo(it.image_path)
         H, W = image.shape[:2]

@@ -124,18 +124,13 @@ def verdict(row: dict) -> str:
 
 
 def probe(items, params=None, progress: bool = True, arrays_to: str | None = None) -> list[dict]:
-    from ..benchmarks.real_localize import load_place, places_of
+    from ..benchmarks.real_localize import with_place
     from ..localizer import LocalizeParams
 
     params = params or LocalizeParams.for_photos()
-    place_of, centres = places_of(items)
-    rows, loaded = [], {}
-    for n, it in enumerate(items):
-        place = place_of[it.key]
-        if place not in loaded:
-            loaded.clear()  # one place's model in memory at a time
-            loaded[place] = load_place(*centres[place])[:3]
-        row = probe_photo(it, *loaded[place], params, arrays_to)
+    rows = []
+    for n, it, place in with_place(items):
+        row = probe_photo(it, *place, params, arrays_to)
         rows.append(row)
         if progress:
             answer = "none" if row["error_m"] is None else f"{row['error_m']:.0f} m at {row['answer_score']:.2f} px"
