@@ -106,8 +106,8 @@ class SkylineParams:
     # - the 2 below| times this, at most 1; 0: edges count wherever they are). Off by default: it stops a faint edge
     # inside a slope from pulling the boundary under a thin band of it (the slope render of issue 18: 17 px -> 0),
     # and on the training side select met the target on 24 / 59 dev / train photos against 23 / 59 (mean within 5 px
-    # 95.4 / 94.7 against 95.2 / 94.4 %), but the default moves every render's and photo's gmm line, and with it the
-    # localizer's, whose figures were not re-measured (experiments/photos/quick-checks-2026-12-05/)
+    # 95.4 / 94.7 against 95.2 / 94.4 %); but on renders it loses foreground occluders (99.7 -> 80 % within 5 px), and as
+    # the default it would move every gmm line and the localizer's figures (experiments/photos/quick-checks-2026-12-05/)
     edge_contrast: float = 0.0
 
 
