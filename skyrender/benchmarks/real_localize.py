@@ -28,7 +28,6 @@ import numpy as np
 from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
 from ..diagnostics.oracle import DEM_DIR, tiles_around
 from ..evaluate import git_commit, position_errors
-from ..localizer.pipeline import distinct_places  # noqa: F401  (the probes in experiments/ch1 take it from here)
 
 HALF_LAT, HALF_LON = 0.6, 0.7  # degrees either side of the place's centre
 RECALL_M = (100.0, 250.0, 1000.0)
@@ -230,22 +229,33 @@ def refined_of(row: dict, max_slope_deg: float | None = None) -> np.ndarray:
     return poses[standable_mask(slopes, bound)] if len(slopes) == len(poses) and len(poses) else poses
 
 
+def photo_skyline(item, params=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(image, skyline (W,) float64, column weights (W,)) of a photo as the photo preset (``params``, default
+    :meth:`LocalizeParams.for_photos`) localizes it: loaded, its skyline extracted by the preset's extractor,
+    the columns weighted by their confidence (:func:`~skyrender.localizer.pipeline.column_weights`)."""
+    from ..features import extract_skyline, load_photo
+    from ..localizer import LocalizeParams
+    from ..localizer.pipeline import column_weights
+
+    params = params or LocalizeParams.for_photos()
+    image = load_photo(item.image_path)
+    ext = extract_skyline(image, params.skyline_params())
+    return image, ext.skyline.astype(np.float64), column_weights(ext.confidence, params.confidence_power)
+
+
 def with_part_margins(rows: list[dict], items: dict, params=None) -> list[dict]:
     """``rows``, each given a ``part_margin`` where it has refined poses but no part margin: the
     photo-confidence cue :func:`~skyrender.localizer.pipeline.answer_part_margin` of its refined poses
-    against the photo's skyline as the photo preset (``params``) extracts it; rows of runs at this code
-    carry theirs. ``items`` maps photo keys to items (every photo of their places; :func:`with_terrain`)."""
-    from ..features import extract_skyline, load_photo
+    against the photo's skyline as the photo preset (``params``) extracts it (:func:`photo_skyline`); rows of
+    runs at this code carry theirs. ``items`` maps photo keys to items (every photo of their places; :func:`with_terrain`)."""
     from ..localizer import LocalizeParams
-    from ..localizer.pipeline import answer_part_margin, column_weights
+    from ..localizer.pipeline import answer_part_margin
 
     params = params or LocalizeParams.for_photos()
     missing = [r for r in rows if r.get("part_margin") is None and len(refined_of(r))]
     for row, it, terrain in with_terrain(missing, items):
-        image = load_photo(it.image_path)
-        ext = extract_skyline(image, params.skyline_params())
-        row["part_margin"] = answer_part_margin(terrain, refined_of(row), ext.skyline.astype(np.float64),
-                                                column_weights(ext.confidence, params.confidence_power), image.shape[0],
+        image, sky, weights = photo_skyline(it, params)
+        row["part_margin"] = answer_part_margin(terrain, refined_of(row), sky, weights, image.shape[0],
                                                 params.runner_up_m or params.same_pose_m, params.score)
     return rows
 

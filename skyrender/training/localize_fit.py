@@ -197,7 +197,7 @@ def main(argv=None) -> int:
                         help="fit the log best score too (a probe, not the default: it did not hold on places left out)")
     parser.add_argument("--part-margin", action="store_true",
                         help="fit the answer's smallest part margin too (pipeline.answer_part_margin; rendered for rows "
-                        "without one, ~2 s a photo); the shipped fit (make fit-photo-confidence)")
+                        "without one, ~2 s a photo); an option, not the shipped fit (experiments/ch1/part-margin/)")
     parser.add_argument("--fov-unknown-rows", default=None, metavar="JSON", nargs="+",
                         help="`real_localize --side train --fov unknown --no-abstain` runs' JSON: the threshold with "
                         "the fov unknown is set on all their rows together (fov_unknown_threshold)")

@@ -21,12 +21,11 @@ import os
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from skyrender.benchmarks.real_localize import distinct_places, refined_of, with_terrain
+from skyrender.benchmarks.real_localize import photo_skyline, refined_of, with_terrain
 from skyrender.camera import Intrinsics
 from skyrender.datasets.real_photos import REPO, items_on_side
-from skyrender.features import extract_skyline, load_photo
 from skyrender.localizer import LocalizeParams
-from skyrender.localizer.pipeline import column_weights
+from skyrender.localizer.pipeline import distinct_places
 from skyrender.localizer.verification import score_skylines
 from skyrender.render.skyline import render_skylines
 
@@ -60,11 +59,9 @@ def main() -> None:
     params = LocalizeParams.for_photos()
     out = []
     for row, it, terrain in with_terrain(rows, items):
-        image = load_photo(it.image_path)
+        image, sky, weights = photo_skyline(it, params)
         H, W = image.shape[:2]
-        ext = extract_skyline(image, params.skyline_params())
-        weights = column_weights(ext.confidence)
-        levels = blurred_levels(ext.skyline.astype(np.float64))
+        levels = blurred_levels(sky)
         poses = refined_of(row)
         pick = distinct_places(poses, a.places)
         k = np.array([[poses[i, 6], W / 2.0, H / 2.0] for i in pick])

@@ -21,12 +21,11 @@ import time
 
 import numpy as np
 
-from skyrender.benchmarks.real_localize import distinct_places, refined_of, with_terrain
+from skyrender.benchmarks.real_localize import photo_skyline, refined_of, with_terrain
 from skyrender.camera import Intrinsics
 from skyrender.datasets.real_photos import items_on_side
-from skyrender.features import extract_skyline, load_photo
 from skyrender.localizer import LocalizeParams
-from skyrender.localizer.pipeline import column_weights, margin_logistic, runner_up_index
+from skyrender.localizer.pipeline import distinct_places, margin_logistic, runner_up_index
 from skyrender.localizer.refinement import refine_pose
 
 SEEDS = (0.85, 1.0, 1.15)  # the fov times about these
@@ -60,10 +59,8 @@ def main(mode: str, out: str, files: list[str]) -> None:
     result = []
     for row, it, terrain in with_terrain(rows, items):
         t0 = time.perf_counter()
-        image = load_photo(it.image_path)
+        image, sky, weights = photo_skyline(it, params)
         H, W = image.shape[:2]
-        ext = extract_skyline(image, params.skyline_params())
-        sky, weights = ext.skyline.astype(np.float64), column_weights(ext.confidence)
         truth = np.asarray(row["truth_xy"])
         poses = refined_of(row).copy()
         before = answer(poses, truth, params.margin_logit, W)

@@ -22,11 +22,11 @@ import os
 import cv2
 import numpy as np
 
-from skyrender.benchmarks.real_localize import distinct_places, refined_of, with_terrain
+from skyrender.benchmarks.real_localize import photo_skyline, refined_of, with_terrain
 from skyrender.camera import Intrinsics, Pose
 from skyrender.datasets.real_photos import REPO, items_on_side
-from skyrender.features import extract_skyline, load_photo
 from skyrender.localizer import LocalizeParams
+from skyrender.localizer.pipeline import distinct_places
 from skyrender.render.photo import cast_pixel_rays
 
 ROWS = os.path.join(REPO, "experiments", "ch1", "confidence-train-rows.json")
@@ -71,10 +71,9 @@ def main() -> None:
     params = LocalizeParams.for_photos()
     out = []
     for row, it, terrain in with_terrain(rows, items):
-        image = load_photo(it.image_path)
+        image, sky, _ = photo_skyline(it, params)
         H, W = image.shape[:2]
-        ext = extract_skyline(image, params.skyline_params())
-        edges, terrain_px = photo_edges(image, ext.skyline, a.width)
+        edges, terrain_px = photo_edges(image, sky, a.width)
         chance = float(edges[terrain_px].mean()) if terrain_px.any() else 0.0
         h = edges.shape[0]
         poses = refined_of(row)

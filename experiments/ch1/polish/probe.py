@@ -19,12 +19,11 @@ import sys
 
 import numpy as np
 
-from skyrender.benchmarks.real_localize import distinct_places, refined_of, with_terrain
+from skyrender.benchmarks.real_localize import photo_skyline, refined_of, with_terrain
 from skyrender.camera import Intrinsics
 from skyrender.datasets.real_photos import REPO, items_on_side
-from skyrender.features import extract_skyline, load_photo
 from skyrender.localizer import LocalizeParams
-from skyrender.localizer.pipeline import column_weights
+from skyrender.localizer.pipeline import distinct_places
 from skyrender.localizer.refinement import local_rescore, refine_pose
 
 ROWS = os.path.join(REPO, "experiments", "ch1", "confidence-train-rows.json")
@@ -37,10 +36,8 @@ def main(out: str, keys: list[str]) -> None:
     result = []
     for row, it, terrain in with_terrain([rows[key] for key in keys], items):
         key = it.key
-        image = load_photo(it.image_path)
+        image, sky, weights = photo_skyline(it, params)
         H, W = image.shape[:2]
-        ext = extract_skyline(image, params.skyline_params())
-        sky, weights = ext.skyline.astype(np.float64), column_weights(ext.confidence)
         K = Intrinsics(W, H, it.focal_px, W / 2, H / 2)
         truth = np.asarray(row["truth_xy"])
         poses = refined_of(row)

@@ -17,12 +17,11 @@ import sys
 
 import numpy as np
 
-from skyrender.benchmarks.real_localize import distinct_places, refined_of, with_terrain
+from skyrender.benchmarks.real_localize import photo_skyline, refined_of, with_terrain
 from skyrender.camera import Intrinsics
 from skyrender.datasets.real_photos import REPO, items_on_side
-from skyrender.features import extract_skyline, load_photo
 from skyrender.localizer import LocalizeParams
-from skyrender.localizer.pipeline import column_weights
+from skyrender.localizer.pipeline import distinct_places
 from skyrender.localizer.verification import score_skylines
 from skyrender.render import render_skylines
 
@@ -41,10 +40,8 @@ def main(out: str, rows_path: str = ROWS) -> None:
              if it.key.startswith("ch1/")}
     result = []
     for row, it, terrain in with_terrain([r for r in rows if r["photo"] in items], items):
-        image = load_photo(it.image_path)
+        image, sky, weights = photo_skyline(it, params)
         H, W = image.shape[:2]
-        ext = extract_skyline(image, params.skyline_params())
-        sky, weights = ext.skyline.astype(np.float64), column_weights(ext.confidence)
         poses = refined_of(row)
         places = distinct_places(poses, 4)
         if len(places) < 2:
