@@ -367,3 +367,20 @@ def test_a_benchmark_run_is_summarised_place_by_place():
     text = table({"photos": [], "summary": {}, "by_place": {"known": places}})
     assert text.endswith("known fov by place (within 250 m / 1 km of photos, answered or withheld): "
                          "? 0 / 0 of 1, place03 1 / 1 of 2, place11 1 / 2 of 2")
+
+
+def test_an_extractor_run_is_compared_with_the_committed_benchmark_photo_by_photo():
+    """``skyline_photos.unchanged_report``: the identity check after a change counts the photos whose median
+    and share within 5 px are the committed ones, and names each that moved."""
+    from skyrender.benchmarks.skyline_photos import unchanged_report
+
+    bench = {"commit": "abc", "sides": {"validation": {"photos": [
+        {"photo": "a", "select": {"median": 0.5, "within5": 1.0}},
+        {"photo": "b", "select": {"median": 2.5, "within5": 0.9}}]}}}
+    now = {"a": {"median": 0.5, "within5": 1.0}, "b": {"median": 2.4, "within5": 0.9}}
+    report = unchanged_report(now, bench, sides=("validation",))
+    assert report.splitlines()[0] == "bench-skyline.json at abc: 1 of 2 photos with the same median and share within 5 px"
+    assert report.splitlines()[1].startswith("  b: ") and len(report.splitlines()) == 2
+    now["b"]["median"] = 2.5
+    report = unchanged_report(now, bench, sides=("validation",))
+    assert report.endswith("2 of 2 photos with the same median and share within 5 px")

@@ -141,6 +141,22 @@ def summary(rows: list[dict], method: str) -> dict:
             "min_within5": float(w.min()), "median_seconds": float(np.median(sec)), "max_seconds": float(sec.max())}
 
 
+def unchanged_report(now: dict, bench: dict, sides=("validation", "heldout"), method: str = "select") -> str:
+    """Photo by photo, ``now`` (``{photo: {"median", "within5"}}``, another run of ``method``) against a
+    committed ``bench-skyline.json`` (``bench``) on ``sides``: how many photos have the same median error and
+    share of columns within 5 px, then one line per photo that does not (an identity check after a change)."""
+    same, differ = 0, []
+    for side in sides:
+        for p in bench["sides"][side]["photos"]:
+            a, b = p[method], now[p["photo"]]
+            if a["median"] == b["median"] and a["within5"] == b["within5"]:
+                same += 1
+            else:
+                differ.append(f"  {p['photo']}: {a} -> {b}")
+    return "\n".join([f"bench-skyline.json at {bench['commit']}: {same} of {same + len(differ)} photos with the same "
+                      "median and share within 5 px", *differ])
+
+
 def confidence_summary(rows: list[dict]) -> dict | None:
     if not rows or "errors_confident" not in rows[0]:
         return None

@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 import os
 
-from skyrender.benchmarks.skyline_photos import evaluate
+from skyrender.benchmarks.skyline_photos import evaluate, unchanged_report
 from skyrender.datasets.real_photos import REPO, items_on_side
 
 HERE = os.path.join(REPO, "experiments", "photos")
@@ -18,19 +18,9 @@ HERE = os.path.join(REPO, "experiments", "photos")
 
 def main() -> None:
     bench = json.load(open(os.path.join(HERE, "bench-skyline.json")))
-    same, differ = 0, []
-    for side in ("validation", "heldout"):
-        now = {r["photo"]: r["select"] for r in evaluate(items_on_side(side), ["select"], progress=False)}
-        for p in bench["sides"][side]["photos"]:
-            a, b = p["select"], now[p["photo"]]
-            if a["median"] == b["median"] and a["within5"] == b["within5"]:
-                same += 1
-            else:
-                differ.append((p["photo"], a, b))
-    print(f"bench-skyline.json at {bench['commit']}: {same} of {same + len(differ)} photos with the same median and "
-          f"share within 5 px")
-    for photo, a, b in differ:
-        print(f"  {photo}: {a} -> {b}")
+    now = {r["photo"]: r["select"] for side in ("validation", "heldout")
+           for r in evaluate(items_on_side(side), ["select"], progress=False)}
+    print(unchanged_report(now, bench))
 
 
 if __name__ == "__main__":

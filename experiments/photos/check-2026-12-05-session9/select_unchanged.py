@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import os
 
+from skyrender.benchmarks.skyline_photos import unchanged_report
 from skyrender.datasets.real_photos import REPO
 
 HERE = os.path.join(REPO, "experiments", "photos")
@@ -20,18 +21,7 @@ HERE = os.path.join(REPO, "experiments", "photos")
 def main() -> None:
     now = {r["photo"]: r["always"] for r in json.load(open(os.path.join(HERE, "select-gate", "compare.json")))}
     bench = json.load(open(os.path.join(HERE, "bench-skyline.json")))
-    same, differ = 0, []
-    for side in ("validation", "heldout"):
-        for p in bench["sides"][side]["photos"]:
-            a, b = p["select"], now[p["photo"]]
-            if a["median"] == b["median"] and a["within5"] == b["within5"]:
-                same += 1
-            else:
-                differ.append((p["photo"], a, b))
-    print(f"bench-skyline.json at {bench['commit']}: {same} of {same + len(differ)} photos with the same median and "
-          f"share within 5 px")
-    for photo, a, b in differ:
-        print(f"  {photo}: {a} -> {b}")
+    print(unchanged_report(now, bench))
 
 
 if __name__ == "__main__":
