@@ -78,7 +78,6 @@ def render(
 ):
     """Render a realistic photograph of the terrain from a pose."""
     from .camera import Intrinsics
-    from .dem import load_dem
     from .io import save_skyline
     from .render import Terrain
     from .render.photo import Look, render_photo
@@ -101,7 +100,7 @@ def render(
         _check_writable(overlay, "--overlay", IMAGE_SUFFIXES)
     if skyline_out is not None:
         _check_writable(skyline_out, "--skyline-out", SKYLINE_SUFFIXES)
-    terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
+    terrain_dem = _load_dem(dem, crs, cell_size)
     if (lat is None) != (lon is None) or (lat is not None and (x is not None or y is not None)):
         raise InputError("give the position as --x and --y, or as --lat and --lon")
     if lat is not None:
@@ -194,7 +193,6 @@ def model(
 ):
     """Build the model databases of a DEM (peaks, neighbour sets, co-visibility)."""
     from .backend import mitsuba
-    from .dem import load_dem
     from .model import CovisibilityParams, HorizonParams, ModelParams, PeakParams, build_model, save_model
 
     for name, value in (("--major-radius", major_radius), ("--minor-radius", minor_radius), ("--spacing", spacing),
@@ -212,7 +210,7 @@ def model(
     try:
         mitsuba(variant)
         t0 = time.perf_counter()
-        terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
+        terrain_dem = _load_dem(dem, crs, cell_size)
         params = ModelParams(PeakParams(major_radius, minor_radius, min_prominence), k,
                              CovisibilityParams(spacing, camera_height, max_range), HorizonParams(height=camera_height))
         built = build_model(terrain_dem, params, progress=progress and not json_out)
@@ -287,7 +285,8 @@ def localize(
     if preset == "auto":
         preset = "photo" if is_camera_photo(str(image)) else "render"
     the_model = _load_or_build_model(model_dir, dem, crs, cell_size, variant,
-                                     ModelParams.for_photos() if preset == "photo" else ModelParams())
+                                     ModelParams.for_photos() if preset == "photo" else ModelParams(),
+                                     progress=not json_out)
     terrain = Terrain(the_model.dem, curvature=not flat_earth, variant=variant)
     base = LocalizeParams.for_photos() if preset == "photo" else LocalizeParams()
     params = replace(base, ordered=not unordered, refine_fov=from_exif is not None)
@@ -334,11 +333,10 @@ def mesh(
     cell_size: Optional[float] = CellOpt,
 ):
     """Export the terrain mesh (trimesh) and, for PLY/OBJ, a Mitsuba scene XML beside it."""
-    from .dem import load_dem
     from .render.mesh_export import MESH_SUFFIXES, export_terrain
 
     _check_writable(out, "--out", MESH_SUFFIXES)
-    terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
+    terrain_dem = _load_dem(dem, crs, cell_size)
     written = export_terrain(terrain_dem, str(out), world=world, curvature=curvature)
     rows, cols = terrain_dem.shape
     summary = {"files": written, "vertices": rows * cols, "faces": 2 * (rows - 1) * (cols - 1),
@@ -362,18 +360,46 @@ def _parse_prior(prior_peak, prior_near) -> dict | None:
     return prior or None
 
 
-def _load_or_build_model(model_dir, dem, crs, cell_size, variant, params=None):
-    """The model from --model, or built from --dem with ``params`` (ModelParams; None:
-    the defaults) and cached (:func:`skyrender.model.cached_model`)."""
-    from .backend import mitsuba
+def _load_dem(dem, crs, cell_size):
+    """The DEM of a ``--dem`` value (:func:`skyrender.dem.load_dem`), with a warning on stderr where
+    some of it is invented (voids far from any data: a missing tile in a box of tiles)."""
     from .dem import load_dem
-    from .model import cached_model, load_model
+
+    terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
+    if terrain_dem.repair.invented:
+        print(f"skyrender: warning: {terrain_dem.name}: {terrain_dem.repair.invented:,} cells lie far from any elevation "
+              "data (a missing tile?); the terrain there is invented, a smooth surface", file=sys.stderr)
+    return terrain_dem
+
+
+def _load_or_build_model(model_dir, dem, crs, cell_size, variant, params=None, progress: bool = False):
+    """The model from --model, or built from --dem with ``params`` (ModelParams; None:
+    the defaults) and cached (:func:`skyrender.model.cached_model`; ``progress``: say so on
+    stderr while it is built)."""
+    from .backend import mitsuba
+    from .model import ModelParams, cached_model, load_model
 
     if model_dir is not None:
-        return load_model(model_dir)
-    terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
+        return _warn_if_coarse(load_model(model_dir))
+    terrain_dem = _load_dem(dem, crs, cell_size)
     mitsuba(variant)
-    return cached_model(terrain_dem) if params is None else cached_model(terrain_dem, params)
+    return _warn_if_coarse(cached_model(terrain_dem, ModelParams() if params is None else params, progress=progress))
+
+
+def _warn_if_coarse(model):
+    """``model``, after a warning on stderr where its DEM is so large that the far horizons stand on a coarser
+    grid than its parameters ask for (``HorizonParams.max_centres``): the far-horizon search then proposes
+    places that far apart, and a photo's place may be missed."""
+    from .model.horizons import grid_spacing
+
+    wanted = model.params.horizons.spacing
+    spacing = grid_spacing(model.dem.extent, model.params.horizons)
+    if spacing > 1.05 * wanted:
+        x0, x1, y0, y1 = model.dem.extent
+        print(f"skyrender: warning: the DEM covers {(x1 - x0) * (y1 - y0) / 1e6:,.0f} km^2, so its far horizons stand "
+              f"{spacing:,.0f} m apart instead of {wanted:,.0f} m; a DEM cut to the photo's region (at most "
+              f"{model.params.horizons.max_centres * wanted ** 2 / 1e6:,.0f} km^2) searches finer", file=sys.stderr)
+    return model
 
 
 def _check_model_dir(path: Path) -> None:

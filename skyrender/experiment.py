@@ -45,6 +45,7 @@ import tomllib
 
 from .errors import InputError
 from .evaluate import orientation_errors, position_errors, provenance, provenance_header, results_table, summarize
+from .progress import progress as progress_bar
 
 PRIORS = ("none", "peak-in-view")
 
@@ -325,7 +326,7 @@ def _run_all(exp: Experiment, done: set, rows: list[dict], results_path: str, wo
                 _run_on_dask(ref, path, manifest, todo, keep, workers, scheduler, progress)
                 continue
             localizer = _Localizer(manifest)
-            for view, conf in _bar(todo, f"{ref.name}", progress):
+            for view, conf in progress_bar(todo, f"{ref.name}", progress, unit="run"):
                 row = localizer.run(view, conf)
                 keep({"dataset": ref.name, "view": view["index"], "configuration": conf.name,
                       "model_seconds": localizer.seconds, **row})
@@ -341,7 +342,7 @@ def _run_on_dask(ref, path, manifest, todo, keep, workers, scheduler, progress) 
         local.model_for(preset)
     with dask_client(workers=workers, scheduler=scheduler) as client:
         futures = {client.submit(_task, path, view, conf, pure=False): (view, conf) for view, conf in todo}
-        for future in _bar(as_completed(futures), ref.name, progress, total=len(futures)):
+        for future in progress_bar(as_completed(futures), ref.name, progress, total=len(futures), unit="run"):
             view, conf = futures[future]
             keep({"dataset": ref.name, "view": view["index"], "configuration": conf.name, **future.result()})
 
@@ -365,14 +366,6 @@ def _run_ch1(ref: DatasetRef, configurations, done: set, keep, progress: bool) -
                   "status": r["status"], "localized": localized, "confidence": r["confidence"],
                   "seconds": r["seconds"], "model_seconds": r["model_seconds"], "stage_seconds": r["stage_seconds"],
                   "position_error_m": r.get("error_m"), "orientation_error_deg": None, "hypotheses": 0})
-
-
-def _bar(items, label: str, enabled: bool, total: int | None = None):
-    if not enabled:
-        return items
-    from tqdm import tqdm
-
-    return tqdm(items, desc=label, unit="run", total=total)
 
 
 # --- tables and plots ----------------------------------------------------------------------

@@ -265,3 +265,81 @@ def test_lonlat_round_trip(view_dem):
     lon, lat = view_dem.to_lonlat(x, y)
     x2, y2 = view_dem.from_lonlat(lon, lat)
     assert abs(x2 - x) < 1e-3 and abs(y2 - y) < 1e-3
+
+
+def test_a_missing_tile_is_filled_with_a_smooth_surface_and_reported(tmp_path):
+    """A void of a tile's size (a missing tile in a box of tiles): GDAL's fill, searching from every void cell,
+    ran for over 10 minutes on 14 Alpine tiles; the cells far from data now take a surface filled on a coarse
+    grid, GDAL filling only the band next to the data. The surface stays within the data's range and as smooth
+    as the terrain around it, and the report counts the invented cells."""
+    from skyrender.dem.repair import FAR_VOID_CELLS
+
+    n, hole = 2400, slice(450, 1950)
+    rows, cols = np.mgrid[0:n, 0:n]
+    z = 1500.0 + 400.0 * np.sin(cols / 300.0) + 300.0 * np.cos(rows / 250.0)
+    z[hole, hole] = np.nan
+    np.save(tmp_path / "holey.npy", z)
+    dem = load_dem(tmp_path / "holey.npy", cell_size=90.0)
+    void = ~np.isfinite(z)
+    assert dem.repair.voids_filled == 1500 * 1500
+    inner = 1500 - 2 * FAR_VOID_CELLS
+    assert inner**2 <= dem.repair.invented <= (inner + 2) ** 2
+    assert "invented" in " ".join(dem.repair.notes)
+    filled = dem.elevation[void]
+    assert np.nanmin(z) - 1 <= filled.min() and filled.max() <= np.nanmax(z) + 1
+    slope = np.hypot(*np.gradient(dem.elevation))
+    assert slope[void].max() < 2.0 * np.nanmax(np.hypot(*np.gradient(np.where(void, np.nan, z))))
+
+
+def test_small_voids_are_filled_by_gdal_as_before():
+    """Voids whose fill is cheap go to GDAL's fill searching the whole grid, as before the coarse fill existed:
+    the CH1 benchmark's DEM windows (up to 0.8 M void cells, where a window reaches into the missing N45E008
+    tile) load to the same fingerprints."""
+    from rasterio.fill import fillnodata
+
+    from skyrender.dem.repair import _fill
+
+    rng = np.random.default_rng(0)
+    z = np.cumsum(rng.normal(0, 5, (300, 400)), axis=0) + 1000.0
+    valid = np.ones(z.shape, bool)
+    valid[100:140, 200:260] = False
+    filled, invented = _fill(np.where(valid, z, 0.0), valid)
+    plain = fillnodata(np.where(valid, z, 0.0).astype(np.float32), mask=valid.astype(np.uint8),
+                       max_search_distance=400.0, smoothing_iterations=0).astype(np.float64)
+    plain[valid] = z[valid]
+    assert invented == 0
+    np.testing.assert_array_equal(filled, plain)
+
+
+def test_the_command_line_warns_when_a_dem_holds_invented_terrain(tmp_path, monkeypatch, capsys):
+    from skyrender import cli
+    from skyrender.dem import repair
+
+    monkeypatch.setattr(repair, "GDAL_FILL_BUDGET", 1.0e4)  # a small grid, its large void taken as a missing tile
+    z = np.full((400, 400), 800.0) + np.arange(400.0)[None, :]
+    z[50:350, 50:350] = np.nan
+    np.save(tmp_path / "holey.npy", z)
+    dem = cli._load_dem(str(tmp_path / "holey.npy"), None, 30.0)
+    assert dem.repair.invented > 0
+    err = capsys.readouterr().err
+    assert "warning" in err and "invented" in err and f"{dem.repair.invented:,}" in err
+    np.save(tmp_path / "whole.npy", np.full((50, 50), 800.0) + np.arange(50.0)[None, :])
+    cli._load_dem(str(tmp_path / "whole.npy"), None, 30.0)
+    assert capsys.readouterr().err == ""
+
+
+def test_the_command_line_warns_when_a_dem_is_too_large_for_the_far_horizon_grid(capsys):
+    """The photo model's far horizons stand 500 m apart up to 60,000 centres (15,000 km^2); a box of 14 SRTM
+    tiles (7,065 x 5,737 cells of 78 m) would put them 2 km apart: the user is told, and how large a DEM keeps
+    500 m. A CH1 benchmark window (1.2 x 1.4 deg) is not warned about."""
+    from types import SimpleNamespace
+
+    from skyrender import cli
+    from skyrender.model import ModelParams
+
+    params = ModelParams.for_photos()
+    for extent, warned in (((0.0, 5737 * 78.0, 0.0, 7065 * 78.0), True), ((0.0, 108_000.0, 0.0, 133_000.0), False)):
+        model = SimpleNamespace(params=params, dem=SimpleNamespace(extent=extent))
+        assert cli._warn_if_coarse(model) is model
+        err = capsys.readouterr().err
+        assert ("2,027 m apart instead of 500 m" in err and "15,000 km^2" in err) if warned else err == ""

@@ -38,6 +38,7 @@ import numpy as np
 from ..camera import Intrinsics
 from ..config import params_from_dict, params_to_dict
 from ..errors import InputError
+from ..progress import progress as progress_bar
 
 FORMAT = "skyrender-dataset"
 FORMAT_VERSION = 1
@@ -320,7 +321,7 @@ def write_dataset(scene_path: str, n: int, out: str, seed: int = 0, *, progress:
             from ..render import Terrain
 
             terrain = Terrain(scene.dem)
-            for i in _progress(todo, "rendering views", progress):
+            for i in progress_bar(todo, "rendering views", progress, unit="view"):
                 write_view(out, i, render_view(terrain, i, seed, spec), spec.realism.jpeg_quality)
     except BaseException:
         if created and not finished_views(out, n, jpeg):  # nothing of value written: leave no folder behind
@@ -344,15 +345,6 @@ def _check_same_dataset(out: str, info: dict) -> None:
     keys = ("format", "dem_fingerprint", "seed", "sampling", "realism")
     if any(old.get(k) != info[k] for k in keys):
         raise InputError(f"{out} holds another dataset (its DEM, seed or knobs differ): choose another --out")
-
-
-def _progress(items, label: str, enabled: bool, total: int | None = None):
-    """``items`` with a tqdm progress bar on stderr when ``enabled``."""
-    if not enabled:
-        return items
-    from tqdm import tqdm
-
-    return tqdm(items, desc=label, unit="view", total=total)
 
 
 # --- Dask --------------------------------------------------------------------------------
@@ -384,5 +376,5 @@ def render_on_dask(scene_path: str, indices: list[int], out: str, seed: int, *, 
                              [seed] * len(indices), pure=False)
         from distributed import as_completed
 
-        for future in _progress(as_completed(futures), "rendering views", progress, total=len(futures)):
+        for future in progress_bar(as_completed(futures), "rendering views", progress, total=len(futures), unit="view"):
             future.result()

@@ -9,6 +9,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import sys
 import time
 from pathlib import Path
 
@@ -56,7 +57,7 @@ def build_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None, 
     seconds["covisibility"] = time.perf_counter() - tick
     tick = time.perf_counter()
     # the horizons' centres stand on the DEM itself: the localizer places its cameras there
-    horizons = build_horizons(terrain, params.horizons, grid_dem=dem)
+    horizons = build_horizons(terrain, params.horizons, grid_dem=dem, progress=progress)
     seconds["horizons"] = time.perf_counter() - tick
     return Model(dem, params, features, neighbours, covis, horizons, time.perf_counter() - t0,
                  {k: round(v, 2) for k, v in seconds.items()})
@@ -86,16 +87,21 @@ def model_cache_key(dem: DEM, params: ModelParams = ModelParams()) -> str:
 CACHE_GENERATION = 3
 
 
-def cached_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None) -> Model:
+def cached_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None, progress: bool = False) -> Model:
     """The model of ``dem`` built with ``params`` from the cache (keyed by the DEM's
     fingerprint and the parameters, under ``g<CACHE_GENERATION>``), built and cached on first
-    use; an unwritable cache only costs the rebuild next time."""
+    use; an unwritable cache only costs the rebuild next time. ``progress``: a line and
+    progress bars on stderr while it is built."""
     cache = model_cache_dir() / f"g{CACHE_GENERATION}" / model_cache_key(dem, params)
     try:
         return load_model(cache, dem=dem, params=params)
     except InputError:
         pass
-    built = build_model(dem, params, terrain=terrain)
+    if progress:
+        rows, cols = dem.shape
+        print(f"skyrender: building the model of {dem.name} ({rows} x {cols} cells; first use, cached in {cache})",
+              file=sys.stderr, flush=True)
+    built = build_model(dem, params, terrain=terrain, progress=progress)
     try:
         save_model(built, cache)
     except InputError:

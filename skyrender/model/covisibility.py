@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..progress import progress as progress_bar
 from ..render import Terrain
 from ..render.visibility import line_of_sight
 
@@ -118,23 +119,9 @@ def learn_covisibility(terrain: Terrain, features: np.ndarray, params: Covisibil
     F = len(features)
     seen_from = []  # per chunk, the sparse (cameras, F) skyline-feature matrix
     chunk = max(1, max_pairs // max(F, 1))
-    starts = range(0, len(cameras), chunk)
-    bar = None
-    if progress:
-        from rich.progress import Progress
-
-        bar = Progress(transient=True)
-        bar.start()
-        task = bar.add_task("co-visibility", total=len(cameras))
-    try:
-        for s in starts:
-            sky = skyline_features(terrain, cameras[s : s + chunk], features, params)
-            seen_from.append(sparse.csr_matrix(sky, dtype=np.int64))
-            if bar is not None:
-                bar.update(task, advance=len(sky))
-    finally:
-        if bar is not None:
-            bar.stop()
+    for s in progress_bar(range(0, len(cameras), chunk), "co-visibility", progress, unit="chunk", leave=False):
+        sky = skyline_features(terrain, cameras[s : s + chunk], features, params)
+        seen_from.append(sparse.csr_matrix(sky, dtype=np.int64))
     # together = S^T S over all cameras. A camera sees tens of the F features on its skyline, so the
     # sparse product costs little where a dense one costs V F^2 (100 s for 2 x 2 tiles' 9,000 features)
     seen = sparse.vstack(seen_from, format="csr") if seen_from else sparse.csr_matrix((0, F), dtype=np.int64)

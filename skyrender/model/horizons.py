@@ -61,12 +61,14 @@ def grid_spacing(extent: tuple[float, float, float, float], params: HorizonParam
     return min(spacing, math.sqrt(area / 16.0))
 
 
-def build_horizons(terrain: Terrain, params: HorizonParams = HorizonParams(), grid_dem=None) -> Horizons:
-    """Far horizons around a grid of camera centres over ``grid_dem`` (default: ``terrain``'s DEM)."""
+def build_horizons(terrain: Terrain, params: HorizonParams = HorizonParams(), grid_dem=None,
+                   progress: bool = False) -> Horizons:
+    """Far horizons around a grid of camera centres over ``grid_dem`` (default: ``terrain``'s DEM);
+    ``progress``: a bar on stderr."""
     grid_dem = terrain.dem if grid_dem is None else grid_dem
     centres = viewpoint_grid(grid_dem, grid_spacing(grid_dem.extent, params), params.height)
     centres = centres[np.isfinite(centres[:, 2])]
-    elevation = render_horizons(terrain, centres, params.bin_deg, params.near_m)
+    elevation = render_horizons(terrain, centres, params.bin_deg, params.near_m, progress=progress)
     # at the precision a saved model keeps (float16: 0.03 deg at 60 deg), so that a model
     # localizes the same freshly built as loaded from its cache
     return Horizons(centres, elevation.astype(np.float16).astype(np.float32), params.bin_deg)

@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from ..camera import Intrinsics
+from ..progress import progress as progress_bar
 from .skyline import render_skylines
 from .terrain import Terrain
 
@@ -27,13 +28,13 @@ CENTRES_PER_CALL = 2048
 
 
 def render_horizons(terrain: Terrain, centres: np.ndarray, bin_deg: float = 0.5, near_m: float = 0.0,
-                    tol_px: float = 0.125) -> np.ndarray:
+                    tol_px: float = 0.125, progress: bool = False) -> np.ndarray:
     """(N, round(360 / bin_deg)) float32 horizon elevation angles (deg) around camera
     centres (N, 3) (world metres), ignoring terrain nearer than ``near_m`` (m).
 
     Bin j holds azimuth j * bin_deg (deg clockwise from grid north). A bin that sees only
     sky gets the lowest elevation rendered (-39.6 deg). ``tol_px``: the bisection's
-    tolerance in the one-column cameras' pixels (0.125 px = 0.06 deg).
+    tolerance in the one-column cameras' pixels (0.125 px = 0.06 deg). ``progress``: a bar on stderr.
 
     Why one column per bin: eight 45-degree cameras of 96 columns each (768 columns, bisected to
     0.25 px), linearly interpolated onto 360 one-degree bins, traced twice the rays of 360 columns
@@ -44,7 +45,8 @@ def render_horizons(terrain: Terrain, centres: np.ndarray, bin_deg: float = 0.5,
     out = np.empty((len(centres), n_bins), np.float32)
     k = Intrinsics(1, ROWS, F_PX, 0.5, ROWS / 2.0)  # the column's centre u = 0.5 looks along the pan
     pans = np.arange(n_bins) * bin_deg
-    for start in range(0, len(centres), CENTRES_PER_CALL):
+    for start in progress_bar(range(0, len(centres), CENTRES_PER_CALL), "far horizons", progress, unit="chunk",
+                              leave=False):
         chunk = centres[start:start + CENTRES_PER_CALL]
         poses = np.zeros((len(chunk) * n_bins, 6))
         poses[:, :3] = np.repeat(chunk, n_bins, axis=0)
