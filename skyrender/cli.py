@@ -286,7 +286,7 @@ def localize(
         preset = "photo" if is_camera_photo(str(image)) else "render"
     the_model = _load_or_build_model(model_dir, dem, crs, cell_size, variant,
                                      ModelParams.for_photos() if preset == "photo" else ModelParams(),
-                                     progress=not json_out)
+                                     progress=not json_out and sys.stderr.isatty())
     terrain = Terrain(the_model.dem, curvature=not flat_earth, variant=variant)
     base = LocalizeParams.for_photos() if preset == "photo" else LocalizeParams()
     params = replace(base, ordered=not unordered, refine_fov=from_exif is not None)
@@ -360,15 +360,21 @@ def _parse_prior(prior_peak, prior_near) -> dict | None:
     return prior or None
 
 
+#: The share of a DEM's cells far from any data (``RepairReport.invented``) from which commands warn: ordinary SRTM
+#: voids stay below it (the CH1 windows without a missing tile: at most 0.1 %)
+INVENTED_WARNING_SHARE = 0.01
+
+
 def _load_dem(dem, crs, cell_size):
-    """The DEM of a ``--dem`` value (:func:`skyrender.dem.load_dem`), with a warning on stderr where
-    some of it is invented (voids far from any data: a missing tile in a box of tiles)."""
+    """The DEM of a ``--dem`` value (:func:`skyrender.dem.load_dem`), with a warning (:func:`_warn`) where
+    much of it is invented (voids far from any data: a missing tile in a box of tiles)."""
     from .dem import load_dem
 
     terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
-    if terrain_dem.repair.invented:
-        print(f"skyrender: warning: {terrain_dem.name}: {terrain_dem.repair.invented:,} cells lie far from any elevation "
-              "data (a missing tile?); the terrain there is invented, a smooth surface", file=sys.stderr)
+    share = terrain_dem.repair.invented / terrain_dem.elevation.size
+    if share >= INVENTED_WARNING_SHARE:
+        _warn(f"{terrain_dem.name}: {100 * share:.0f} % of the DEM lies far from any elevation data (a missing tile, "
+              "or no data outside an outline); the terrain there is invented")
     return terrain_dem
 
 
@@ -387,7 +393,7 @@ def _load_or_build_model(model_dir, dem, crs, cell_size, variant, params=None, p
 
 
 def _warn_if_coarse(model):
-    """``model``, after a warning on stderr where its DEM is so large that the far horizons stand on a coarser
+    """``model``, after a warning (:func:`_warn`) where its DEM is so large that the far horizons stand on a coarser
     grid than its parameters ask for (``HorizonParams.max_centres``): the far-horizon search then proposes
     places that far apart, and a photo's place may be missed."""
     from .model.horizons import grid_spacing
@@ -396,9 +402,9 @@ def _warn_if_coarse(model):
     spacing = grid_spacing(model.dem.extent, model.params.horizons)
     if spacing > 1.05 * wanted:
         x0, x1, y0, y1 = model.dem.extent
-        print(f"skyrender: warning: the DEM covers {(x1 - x0) * (y1 - y0) / 1e6:,.0f} km^2, so its far horizons stand "
-              f"{spacing:,.0f} m apart instead of {wanted:,.0f} m; a DEM cut to the photo's region (at most "
-              f"{model.params.horizons.max_centres * wanted ** 2 / 1e6:,.0f} km^2) searches finer", file=sys.stderr)
+        _warn(f"the DEM covers {(x1 - x0) * (y1 - y0) / 1e6:,.0f} km^2, so its far horizons stand {spacing:,.0f} m apart "
+              f"instead of {wanted:,.0f} m; a DEM cut to the photo's region (at most "
+              f"{model.params.horizons.max_centres * wanted ** 2 / 1e6:,.0f} km^2) searches finer")
     return model
 
 
@@ -490,18 +496,38 @@ def experiment(
     typer.echo(f"results in {exp.out}")
 
 
+#: Warnings of the running command (:func:`_warn`), printed on stderr when it ends without an error: an error
+#: stays the one line on stderr that CONTRACT.md promises
+_WARNINGS: list[str] = []
+
+
+def _warn(message: str) -> None:
+    _WARNINGS.append(message)
+
+
+def _print_warnings() -> None:
+    for message in _WARNINGS:
+        print(f"skyrender: warning: {message}", file=sys.stderr)
+    _WARNINGS.clear()
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point: run the app, turning bad input into one line and exit status 2."""
+    """Entry point: run the app, turning bad input into one line and exit status 2 (warnings, on stderr, only
+    where it ends without an error)."""
     command = typer.main.get_command(app)
+    _WARNINGS.clear()
     try:
         with warnings.catch_warnings():  # a library's warning is not ours to print: one line per error
             warnings.simplefilter("ignore")
             rv = command.main(args=argv, prog_name="skyrender", standalone_mode=False)
+        _print_warnings()
         return int(rv) if isinstance(rv, int) else 0
     except InputError as exc:
         _fail(str(exc))
         return 2
     except _click_classes("Exit") as exc:
+        if exc.exit_code != 2:
+            _print_warnings()
         return exc.exit_code
     except _click_classes("ClickException") as exc:  # usage errors: missing option, bad number, ...
         if exc.format_message():  # (no arguments at all: the help was printed)

@@ -307,7 +307,7 @@ def test_small_voids_are_filled_by_gdal_as_before():
     plain = fillnodata(np.where(valid, z, 0.0).astype(np.float32), mask=valid.astype(np.uint8),
                        max_search_distance=400.0, smoothing_iterations=0).astype(np.float64)
     plain[valid] = z[valid]
-    assert invented == 0
+    assert invented == (40 - 2 * 8) * (60 - 2 * 8)  # counted all the same: cells over 8 from data
     np.testing.assert_array_equal(filled, plain)
 
 
@@ -315,16 +315,21 @@ def test_the_command_line_warns_when_a_dem_holds_invented_terrain(tmp_path, monk
     from skyrender import cli
     from skyrender.dem import repair
 
-    monkeypatch.setattr(repair, "GDAL_FILL_BUDGET", 1.0e4)  # a small grid, its large void taken as a missing tile
+    monkeypatch.setattr(repair, "GDAL_FILL_BUDGET", 1.0e4)  # a small grid, its large void filled as a missing tile's
     z = np.full((400, 400), 800.0) + np.arange(400.0)[None, :]
     z[50:350, 50:350] = np.nan
     np.save(tmp_path / "holey.npy", z)
     dem = cli._load_dem(str(tmp_path / "holey.npy"), None, 30.0)
-    assert dem.repair.invented > 0
+    assert dem.repair.invented == (300 - 2 * 8) ** 2  # the void's cells over FAR_VOID_CELLS from its edge
+    assert capsys.readouterr().err == ""  # held until the command ends without an error
+    cli._print_warnings()
     err = capsys.readouterr().err
-    assert "warning" in err and "invented" in err and f"{dem.repair.invented:,}" in err
-    np.save(tmp_path / "whole.npy", np.full((50, 50), 800.0) + np.arange(50.0)[None, :])
-    cli._load_dem(str(tmp_path / "whole.npy"), None, 30.0)
+    assert "warning" in err and "invented" in err and "50 % of the DEM" in err
+    small = np.full((200, 200), 800.0) + np.arange(200.0)[None, :]
+    small[100:130, 100:130] = np.nan  # an ordinary void: 0.5 % of the DEM invented, no warning
+    np.save(tmp_path / "small.npy", small)
+    assert 0 < cli._load_dem(str(tmp_path / "small.npy"), None, 30.0).repair.invented
+    cli._print_warnings()
     assert capsys.readouterr().err == ""
 
 
@@ -341,5 +346,23 @@ def test_the_command_line_warns_when_a_dem_is_too_large_for_the_far_horizon_grid
     for extent, warned in (((0.0, 5737 * 78.0, 0.0, 7065 * 78.0), True), ((0.0, 108_000.0, 0.0, 133_000.0), False)):
         model = SimpleNamespace(params=params, dem=SimpleNamespace(extent=extent))
         assert cli._warn_if_coarse(model) is model
+        cli._print_warnings()
         err = capsys.readouterr().err
         assert ("2,027 m apart instead of 500 m" in err and "15,000 km^2" in err) if warned else err == ""
+
+
+def test_a_command_prints_its_warning_when_it_succeeds_and_only_its_error_when_it_fails(tmp_path, capsys):
+    """CONTRACT.md: bad input gives one line on stderr; the warning of invented terrain is held until the
+    command ends without an error."""
+    from skyrender import cli
+
+    z = np.full((120, 120), 800.0) + np.arange(120.0)[None, :]
+    z[20:100, 20:100] = np.nan
+    np.save(tmp_path / "holey.npy", z)
+    dem = str(tmp_path / "holey.npy")
+    assert cli.main(["mesh", dem, "--out", str(tmp_path / "t.ply"), "--cell-size", "30", "--json"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("skyrender: warning: holey.npy: 28 % of the DEM")  # (80 - 16)^2 of 120^2
+    assert cli.main(["mesh", dem, "--out", str(tmp_path / "t.xyz"), "--cell-size", "30"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("skyrender: error:")

@@ -32,7 +32,7 @@ class RepairReport:
     voids_filled: int = 0
     spikes_repaired: int = 0
     notes: tuple[str, ...] = ()
-    invented: int = 0  # of the voids, cells far from any data (a missing tile): filled with a smooth surface
+    invented: int = 0  # of the voids, cells over repair.FAR_VOID_CELLS from any data (a missing tile, nodata outside an outline)
 
 
 @dataclass(frozen=True, eq=False)

@@ -59,23 +59,19 @@ COARSE_FILL_SMOOTHING = 20
 
 def _fill(z: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, int]:
     """Interpolate the invalid cells of z from the valid ones (GDAL's inverse-distance fill); also
-    returns how many cells were far from data (0 where the voids are small).
+    returns how many of them lie more than :data:`FAR_VOID_CELLS` from any valid cell (invented terrain).
 
-    Where the voids are large (:data:`GDAL_FILL_BUDGET`: a missing tile in a box of tiles), the cells more
-    than :data:`FAR_VOID_CELLS` from any data take a smooth surface filled on a grid
-    :data:`COARSE_FILL_FACTOR` times coarser, and GDAL fills only the band between it and the data: in
-    seconds instead of hours, and without GDAL's steps across a wide void. Either way the terrain there
-    is invented."""
+    Where the voids are large (:data:`GDAL_FILL_BUDGET`: a missing tile in a box of tiles), those far
+    cells take a smooth surface filled on a grid :data:`COARSE_FILL_FACTOR` times coarser, and GDAL fills
+    only the band between it and the data: in seconds instead of hours, and without GDAL's steps across a
+    wide void."""
     if valid.all():
         return z.astype(np.float64, copy=True), 0
     if not valid.any():
         raise InputError("DEM has no valid elevation at all")
-    far_cells = 0
-    voids = np.count_nonzero(~valid)
-    distance = ndimage.distance_transform_edt(~valid) if voids * max(z.shape) > GDAL_FILL_BUDGET else None
-    if distance is not None and voids * float(distance.max()) > GDAL_FILL_BUDGET:
-        far = distance > FAR_VOID_CELLS
-        far_cells = int(np.count_nonzero(far))
+    distance = ndimage.distance_transform_edt(~valid)
+    far = distance > FAR_VOID_CELLS
+    if np.count_nonzero(~valid) * float(distance.max()) > GDAL_FILL_BUDGET:
         seeded = np.where(far, _coarse_fill(z, valid, COARSE_FILL_FACTOR), z)
         out = _gdal_fill(seeded, valid | far, FAR_VOID_CELLS + 2)
     else:
@@ -85,7 +81,7 @@ def _fill(z: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, int]:
         nearest = ndimage.distance_transform_edt(~valid, return_distances=False, return_indices=True)
         out[still] = z[tuple(i[still] for i in nearest)]
     out[valid] = z[valid]
-    return out, far_cells
+    return out, int(np.count_nonzero(far))
 
 
 def _gdal_fill(z: np.ndarray, valid: np.ndarray, reach: float, smoothing: int = 0) -> np.ndarray:
@@ -141,8 +137,8 @@ def repair_elevation(z: np.ndarray, cell_size_m: float, nodata_mask: np.ndarray 
     if void.any():
         notes.append(f"filled {int(void.sum())} void cells")
     if far_cells:
-        notes.append(f"{far_cells} void cells lie over {FAR_VOID_CELLS} cells from any data (a missing tile?): "
-                     "the terrain there is invented, a smooth surface")
+        notes.append(f"{far_cells} void cells lie over {FAR_VOID_CELLS} cells from any data: the terrain there is "
+                     "invented")
     if bad_spikes.any():
         notes.append(f"repaired {int(bad_spikes.sum())} spike cells")
     return fixed, RepairReport(int(void.sum()), int(bad_spikes.sum()), tuple(notes), far_cells)
