@@ -26,6 +26,8 @@ app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_
 DemOpt = typer.Option(..., "--dem", help="DEM file (GeoTIFF, .hgt, .asc, .npy/.npz) or builtin:jacksboro")
 CrsOpt = typer.Option(None, "--crs", help="CRS of a DEM file that has none, e.g. EPSG:31254")
 CellOpt = typer.Option(None, "--cell-size", help="metres per cell, for .npy/.npz DEMs")
+BoundsOpt = typer.Option(None, "--dem-bounds", help="W,S,E,N: read only this window of the DEM's raster files, in "
+                         "their CRS (degrees for SRTM tiles): a photo's region of a large mosaic")
 VariantOpt = typer.Option(None, "--variant", help="Mitsuba variant (default $SKYRENDER_VARIANT or llvm_ad_rgb)")
 
 
@@ -64,6 +66,7 @@ def render(
     json_out: bool = typer.Option(False, "--json", help="print the pose as one JSON object"),
     crs: Optional[str] = CrsOpt,
     cell_size: Optional[float] = CellOpt,
+    dem_bounds: Optional[str] = BoundsOpt,
     sun_azimuth: float = typer.Option(135.0, help="sun azimuth, degrees clockwise from north"),
     sun_elevation: float = typer.Option(35.0, help="sun elevation, degrees"),
     haze: float = typer.Option(40_000.0, help="aerial-perspective e-folding distance (m)"),
@@ -100,7 +103,7 @@ def render(
         _check_writable(overlay, "--overlay", IMAGE_SUFFIXES)
     if skyline_out is not None:
         _check_writable(skyline_out, "--skyline-out", SKYLINE_SUFFIXES)
-    terrain_dem = _load_dem(dem, crs, cell_size)
+    terrain_dem = _load_dem(dem, crs, cell_size, dem_bounds)
     if (lat is None) != (lon is None) or (lat is not None and (x is not None or y is not None)):
         raise InputError("give the position as --x and --y, or as --lat and --lon")
     if lat is not None:
@@ -189,6 +192,7 @@ def model(
     json_out: bool = typer.Option(False, "--json", help="print the summary as one JSON object"),
     crs: Optional[str] = CrsOpt,
     cell_size: Optional[float] = CellOpt,
+    dem_bounds: Optional[str] = BoundsOpt,
     variant: Optional[str] = VariantOpt,
 ):
     """Build the model databases of a DEM (peaks, neighbour sets, co-visibility)."""
@@ -210,7 +214,7 @@ def model(
     try:
         mitsuba(variant)
         t0 = time.perf_counter()
-        terrain_dem = _load_dem(dem, crs, cell_size)
+        terrain_dem = _load_dem(dem, crs, cell_size, dem_bounds)
         params = ModelParams(PeakParams(major_radius, minor_radius, min_prominence), k,
                              CovisibilityParams(spacing, camera_height, max_range), HorizonParams(height=camera_height))
         built = build_model(terrain_dem, params, progress=progress and not json_out)
@@ -252,6 +256,7 @@ def localize(
                                "files or files with EXIF camera data, render otherwise"),
     crs: Optional[str] = CrsOpt,
     cell_size: Optional[float] = CellOpt,
+    dem_bounds: Optional[str] = BoundsOpt,
     variant: Optional[str] = VariantOpt,
 ):
     """Estimate the camera pose (x, y, z, pan, tilt, swing) from one photograph.
@@ -284,7 +289,7 @@ def localize(
     from_exif = exif_fov(str(image)) if fov is None else None
     if preset == "auto":
         preset = "photo" if is_camera_photo(str(image)) else "render"
-    the_model = _load_or_build_model(model_dir, dem, crs, cell_size, variant,
+    the_model = _load_or_build_model(model_dir, dem, crs, cell_size, dem_bounds, variant,
                                      ModelParams.for_photos() if preset == "photo" else ModelParams(),
                                      progress=not json_out and sys.stderr.isatty())
     terrain = Terrain(the_model.dem, curvature=not flat_earth, variant=variant)
@@ -331,12 +336,13 @@ def mesh(
     json_out: bool = typer.Option(False, "--json", help="print the summary as one JSON object"),
     crs: Optional[str] = CrsOpt,
     cell_size: Optional[float] = CellOpt,
+    dem_bounds: Optional[str] = BoundsOpt,
 ):
     """Export the terrain mesh (trimesh) and, for PLY/OBJ, a Mitsuba scene XML beside it."""
     from .render.mesh_export import MESH_SUFFIXES, export_terrain
 
     _check_writable(out, "--out", MESH_SUFFIXES)
-    terrain_dem = _load_dem(dem, crs, cell_size)
+    terrain_dem = _load_dem(dem, crs, cell_size, dem_bounds)
     written = export_terrain(terrain_dem, str(out), world=world, curvature=curvature)
     rows, cols = terrain_dem.shape
     summary = {"files": written, "vertices": rows * cols, "faces": 2 * (rows - 1) * (cols - 1),
@@ -365,12 +371,24 @@ def _parse_prior(prior_peak, prior_near) -> dict | None:
 INVENTED_WARNING_SHARE = 0.01
 
 
-def _load_dem(dem, crs, cell_size):
+def _load_dem(dem, crs, cell_size, bounds=None):
     """The DEM of a ``--dem`` value (:func:`skyrender.dem.load_dem`), with a warning (:func:`_warn`) where
-    much of it is invented (voids far from any data: a missing tile in a box of tiles)."""
+    much of it is invented (voids far from any data: a missing tile in a box of tiles). ``bounds``: the
+    ``--dem-bounds`` text, W,S,E,N in the raster files' CRS."""
     from .dem import load_dem
+    from .dem.io import BUILTIN_DEMS
 
-    terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size)
+    window = None
+    if bounds is not None:
+        try:
+            window = tuple(float(v) for v in bounds.split(","))
+        except ValueError:
+            window = ()
+        if len(window) != 4 or not all(np.isfinite(window)) or not (window[0] < window[2] and window[1] < window[3]):
+            raise InputError(f"--dem-bounds must be W,S,E,N with W < E and S < N, got {bounds!r}")
+        if str(dem) in BUILTIN_DEMS or str(dem) == "builtin:naval2000" or str(dem).lower().endswith((".npy", ".npz")):
+            raise InputError("--dem-bounds needs raster DEM files (.tif, .hgt, .asc, .vrt), not a built-in or numpy DEM")
+    terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size, bounds=window)
     share = terrain_dem.repair.invented / terrain_dem.elevation.size
     if share >= INVENTED_WARNING_SHARE:
         _warn(f"{terrain_dem.name}: {100 * share:.0f} % of the DEM lies far from any elevation data (a missing tile, "
@@ -378,7 +396,7 @@ def _load_dem(dem, crs, cell_size):
     return terrain_dem
 
 
-def _load_or_build_model(model_dir, dem, crs, cell_size, variant, params=None, progress: bool = False):
+def _load_or_build_model(model_dir, dem, crs, cell_size, bounds, variant, params=None, progress: bool = False):
     """The model from --model, or built from --dem with ``params`` (ModelParams; None:
     the defaults) and cached (:func:`skyrender.model.cached_model`; ``progress``: say so on
     stderr while it is built)."""
@@ -386,8 +404,10 @@ def _load_or_build_model(model_dir, dem, crs, cell_size, variant, params=None, p
     from .model import ModelParams, cached_model, load_model
 
     if model_dir is not None:
+        if bounds is not None:
+            raise InputError("--dem-bounds goes with --dem, not --model")
         return _warn_if_coarse(load_model(model_dir))
-    terrain_dem = _load_dem(dem, crs, cell_size)
+    terrain_dem = _load_dem(dem, crs, cell_size, bounds)
     mitsuba(variant)
     return _warn_if_coarse(cached_model(terrain_dem, ModelParams() if params is None else params, progress=progress))
 
@@ -403,8 +423,8 @@ def _warn_if_coarse(model):
     if spacing > 1.05 * wanted:
         x0, x1, y0, y1 = model.dem.extent
         _warn(f"the DEM covers {(x1 - x0) * (y1 - y0) / 1e6:,.0f} km^2, so its far horizons stand {spacing:,.0f} m apart "
-              f"instead of {wanted:,.0f} m; a DEM cut to the photo's region (at most "
-              f"{model.params.horizons.max_centres * wanted ** 2 / 1e6:,.0f} km^2) searches finer")
+              f"instead of {wanted:,.0f} m; cut to the photo's region (--dem-bounds W,S,E,N; at most "
+              f"{model.params.horizons.max_centres * wanted ** 2 / 1e6:,.0f} km^2), it searches finer")
     return model
 
 

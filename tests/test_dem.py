@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 from affine import Affine
@@ -366,3 +368,27 @@ def test_a_command_prints_its_warning_when_it_succeeds_and_only_its_error_when_i
     assert cli.main(["mesh", dem, "--out", str(tmp_path / "t.xyz"), "--cell-size", "30"]) == 2
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and err[0].startswith("skyrender: error:")
+
+
+def test_dem_bounds_cut_a_window_of_the_tiles_on_the_command_line(tmp_path, capsys):
+    """``--dem-bounds W,S,E,N`` (the files' CRS): what the warning of a DEM too large for the far-horizon grid
+    asks for. A quarter of a tile by a quarter reads 301 x 301 posts; bad or disjoint bounds are one-line errors."""
+    from skyrender import cli
+
+    tile = tmp_path / "N46E007.hgt"
+    _write_hgt(tile)
+    out = tmp_path / "t.ply"
+    assert cli.main(["mesh", str(tile), "--dem-bounds", "7.25,46.25,7.5,46.5", "--out", str(out), "--json"]) == 0
+    window = load_dem(tile, bounds=(7.25, 46.25, 7.5, 46.5))
+    assert json.loads(capsys.readouterr().out)["vertices"] == window.elevation.size
+    whole = load_dem(tile)
+    assert 0.04 < window.elevation.size / whole.elevation.size < 0.09
+    lon, lat = window.to_lonlat(*window.centre)
+    assert lon == pytest.approx(7.375, abs=0.01) and lat == pytest.approx(46.375, abs=0.01)
+    for bounds, says in (("7.5,46.25,7.25,46.5", "W < E"), ("a,b,c,d", "W,S,E,N"),
+                         ("20,20,21,21", "outside the tiles")):
+        assert cli.main(["mesh", str(tile), "--dem-bounds", bounds, "--out", str(out)]) == 2
+        err = capsys.readouterr().err.splitlines()
+        assert len(err) == 1 and says in err[0]
+    assert cli.main(["mesh", "builtin:jacksboro", "--dem-bounds", "1,2,3,4", "--out", str(out)]) == 2
+    assert "raster DEM files" in capsys.readouterr().err

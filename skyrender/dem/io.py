@@ -130,6 +130,11 @@ def _load_mosaic(paths: list[str], *, crs, resolution: float | None, bounds=None
             raise InputError(f"{name}: the tiles have different cell sizes")
         file_crs = sources[0].crs
         nodata = sources[0].nodata
+        if bounds is not None:
+            west, south = min(src.bounds.left for src in sources), min(src.bounds.bottom for src in sources)
+            east, north = max(src.bounds.right for src in sources), max(src.bounds.top for src in sources)
+            if bounds[0] >= east or bounds[2] <= west or bounds[1] >= north or bounds[3] <= south:
+                raise InputError(f"{name}: the window lies outside the tiles ({west:g}..{east:g} x {south:g}..{north:g})")
         try:
             data, transform = merge(sources, bounds=bounds, nodata=nodata if nodata is not None else -32768,
                                     masked=True)
