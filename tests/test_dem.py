@@ -309,7 +309,7 @@ def test_small_voids_are_filled_by_gdal_as_before():
     plain = fillnodata(np.where(valid, z, 0.0).astype(np.float32), mask=valid.astype(np.uint8),
                        max_search_distance=400.0, smoothing_iterations=0).astype(np.float64)
     plain[valid] = z[valid]
-    assert invented == (40 - 2 * 8) * (60 - 2 * 8)  # counted all the same: cells over 8 from data
+    assert int(invented.sum()) == (40 - 2 * 8) * (60 - 2 * 8)  # marked all the same: cells over 8 from data
     np.testing.assert_array_equal(filled, plain)
 
 
@@ -392,3 +392,20 @@ def test_dem_bounds_cut_a_window_of_the_tiles_on_the_command_line(tmp_path, caps
         assert len(err) == 1 and says in err[0]
     assert cli.main(["mesh", "builtin:jacksboro", "--dem-bounds", "1,2,3,4", "--out", str(out)]) == 2
     assert "raster DEM files" in capsys.readouterr().err
+
+
+def test_the_invented_mask_follows_the_grid_through_reprojection_and_block_means(tmp_path):
+    """A tile with a 100 x 400-post void (rows 600-699, columns 300-699): after reprojection to UTM the
+    invented cells lie where the void was, and a block-mean copy keeps them."""
+    tile = tmp_path / "N46E007.hgt"
+    _write_hgt(tile, void_rows=100)
+    dem = load_dem(tile)
+    assert dem.invented is not None and dem.invented.shape == dem.shape
+    assert dem.repair.invented > 0
+    middle = dem.from_lonlat(7 + 500 / 1200, 47 - 650 / 1200)
+    away = dem.from_lonlat(7 + 500 / 1200, 47 - 200 / 1200)
+    assert dem.is_invented(*middle) and not dem.is_invented(*away)
+    assert abs(int(dem.invented.sum()) - dem.repair.invented) < 0.1 * dem.repair.invented  # resampled, about as many
+    coarse = dem.coarsened(3)
+    assert coarse.is_invented(*middle) and not coarse.is_invented(*away)
+    assert load_dem(tmp_path / "N46E007.hgt", bounds=(7.0, 46.0, 7.2, 46.2)).invented is None  # no void in the window

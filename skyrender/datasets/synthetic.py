@@ -124,6 +124,26 @@ def relief_pan(horizon: np.ndarray, window_bins: int, rng: np.random.Generator) 
     return (float(rng.choice(n, p=weights / weights.sum())) + rng.uniform(-0.5, 0.5)) * 360.0 / n
 
 
+#: A drawn view is drawn again where more of its skyline's columns than this lie on invented terrain
+#: (:attr:`~skyrender.dem.DEM.invented`: a missing tile, no data outside an outline): its truth would be made up.
+MAX_INVENTED_SKYLINE_SHARE = 0.05
+
+
+def invented_skyline_share(dem, pose, intrinsics: Intrinsics, skyline: np.ndarray, distance: np.ndarray) -> float:
+    """Share of the columns (0-1) whose skyline terrain, ``distance`` metres along the ray just below the
+    boundary (:func:`~skyrender.render.render_skylines` ``with_distance``), stands on the DEM's invented cells."""
+    from ..camera import pixel_directions
+
+    seen = np.isfinite(skyline) & np.isfinite(distance)
+    if not seen.any():
+        return 0.0
+    cols = np.flatnonzero(seen)
+    rays = pixel_directions(cols + 0.5, np.minimum(skyline[cols] + 0.5, intrinsics.height - 0.5), pose, intrinsics)
+    x = pose.x + distance[cols] * rays[:, 0]
+    y = pose.y + distance[cols] * rays[:, 1]
+    return float(np.count_nonzero(dem.is_invented(x, y))) / len(skyline)
+
+
 def sample_view(terrain, index: int, seed: int, sampling: Sampling):
     """(pose, intrinsics, height above ground, true skyline) of view ``index``; InputError when
     ``sampling.max_draws`` candidates give no view with enough relief."""
@@ -137,6 +157,8 @@ def sample_view(terrain, index: int, seed: int, sampling: Sampling):
     W, H = (int(v) for v in sampling.size)
     for _ in range(sampling.max_draws):
         x, y = rng.uniform(xmin + mx, xmax - mx), rng.uniform(ymin + my, ymax - my)
+        if dem.is_invented(x, y):  # no camera on terrain the DEM's loading made up (a missing tile, outside an outline)
+            continue
         height = _uniform(rng, sampling.height_m)
         intrinsics = Intrinsics.from_fov(_uniform(rng, sampling.fov_deg), W, H)
         z = float(dem.ground(x, y)) + height
@@ -150,7 +172,12 @@ def sample_view(terrain, index: int, seed: int, sampling: Sampling):
             tilt = _uniform(rng, sampling.tilt_deg)
         swing = _uniform(rng, (-sampling.swing_deg, sampling.swing_deg))
         pose = dem.camera_pose(x, y, height, pan, tilt, swing)
-        skyline = render_skylines(terrain, pose, intrinsics)
+        if dem.invented is None:
+            skyline = render_skylines(terrain, pose, intrinsics)
+        else:
+            skyline, distance = render_skylines(terrain, pose, intrinsics, with_distance=True)
+            if invented_skyline_share(dem, pose, intrinsics, skyline, distance) > MAX_INVENTED_SKYLINE_SHARE:
+                continue
         inside = np.isfinite(skyline) & (skyline > 0) & (skyline < H)
         if inside.mean() < sampling.min_terrain_columns:
             continue

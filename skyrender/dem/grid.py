@@ -47,6 +47,8 @@ class DEM:
         metric frame with no geo-reference (lat/lon then unavailable).
     name : where the DEM came from, for messages.
     repair : what loading repaired.
+    invented : (rows, cols) bool, True where loading invented the terrain (void cells far from any
+        data: ``RepairReport.invented``), or None where nothing was; not part of the fingerprint.
     """
 
     elevation: np.ndarray
@@ -54,6 +56,7 @@ class DEM:
     crs: str | None
     name: str = ""
     repair: RepairReport = field(default_factory=RepairReport)
+    invented: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         z = self.elevation
@@ -64,6 +67,8 @@ class DEM:
         t = self.transform
         if t.b != 0 or t.d != 0 or t.a <= 0 or t.e >= 0:
             raise InputError(f"{self.name or 'DEM'}: only north-up grids are supported (transform {tuple(t)[:6]})")
+        if self.invented is not None and self.invented.shape != z.shape:
+            raise ValueError(f"invented mask {self.invented.shape} does not match the grid {z.shape}")
 
     # --- grid geometry -------------------------------------------------------
     @property
@@ -111,6 +116,19 @@ class DEM:
         """:meth:`contains` on fractional indices (NaN compares False: off the surface)."""
         rows, cols = self.shape
         return (col >= 0) & (col <= cols - 1) & (row >= 0) & (row <= rows - 1)
+
+    def is_invented(self, x, y) -> np.ndarray:
+        """True where the cell holding world point (x, y) is invented terrain (:attr:`invented`);
+        False outside the grid and where nothing was invented."""
+        x, y = np.broadcast_arrays(np.asarray(x, np.float64), np.asarray(y, np.float64))
+        if self.invented is None:
+            return np.zeros(x.shape, bool)
+        col, row = ~self.transform @ (x, y)
+        row, col = np.floor(row).astype(np.int64), np.floor(col).astype(np.int64)
+        inside = (row >= 0) & (row < self.shape[0]) & (col >= 0) & (col < self.shape[1])
+        out = np.zeros(x.shape, bool)
+        out[inside] = self.invented[row[inside], col[inside]]
+        return out
 
     def ground(self, x, y) -> np.ndarray:
         """Height g(x, y) of the terrain surface in metres; NaN outside the DEM.
@@ -203,7 +221,10 @@ class DEM:
         if min(rows, cols) < 2:
             raise InputError(f"{self.name or 'DEM'}: too small for {factor} x {factor} blocks")
         z = self.elevation[: rows * factor, : cols * factor].reshape(rows, factor, cols, factor).mean(axis=(1, 3))
-        return DEM(z, self.transform @ Affine.scale(factor), self.crs, f"{self.name} ({factor}x{factor} block mean)")
+        invented = None if self.invented is None else (
+            self.invented[: rows * factor, : cols * factor].reshape(rows, factor, cols, factor).mean(axis=(1, 3)) > 0.5)
+        return DEM(z, self.transform @ Affine.scale(factor), self.crs, f"{self.name} ({factor}x{factor} block mean)",
+                   invented=invented)
 
     def fingerprint(self) -> str:
         """Stable hash of elevations, grid and CRS (to refuse mismatched models)."""

@@ -248,13 +248,14 @@ def _georeference(z, nodata, transform: Affine, crs: str | None, name: str, reso
         cell_m = math.sqrt(abs(transform.a) * math.cos(math.radians(lat_mid)) * abs(transform.e)) * EARTH_METRES_PER_DEGREE
     else:
         cell_m = math.sqrt(abs(transform.a * transform.e))
-    fixed, report = repair_elevation(z, cell_m, nodata)
+    fixed, report, invented = repair_elevation(z, cell_m, nodata)
     if not geographic:
-        return DEM(fixed, transform, crs, name, report)
-    return _reproject_to_utm(fixed, transform, crs, name, report, resolution)
+        return DEM(fixed, transform, crs, name, report, invented)
+    return _reproject_to_utm(fixed, transform, crs, name, report, resolution, invented)
 
 
-def _reproject_to_utm(z, transform: Affine, crs: str, name: str, report: RepairReport, resolution: float | None) -> DEM:
+def _reproject_to_utm(z, transform: Affine, crs: str, name: str, report: RepairReport, resolution: float | None,
+                      invented: np.ndarray | None = None) -> DEM:
     from pyproj import Transformer
     from rasterio.warp import Resampling, reproject
 
@@ -284,12 +285,21 @@ def _reproject_to_utm(z, transform: Affine, crs: str, name: str, report: RepairR
     dst = np.full((height, width), np.nan, dtype=np.float64)
     reproject(z, dst, src_transform=transform, src_crs=crs, dst_transform=dst_transform, dst_crs=dst_crs,
               resampling=Resampling.bilinear, src_nodata=np.nan, dst_nodata=np.nan)
-    dst, dst_transform = _trim_invalid_border(dst, dst_transform)
-    return DEM(dst, dst_transform, dst_crs, name, report)
+    rows_kept, cols_kept = _valid_window(dst)
+    dst_transform = dst_transform @ Affine.translation(cols_kept.start, rows_kept.start)
+    dst = np.ascontiguousarray(dst[rows_kept, cols_kept])
+    if invented is not None:
+        mask = np.zeros((height, width), np.uint8)
+        reproject(invented.astype(np.uint8), mask, src_transform=transform, src_crs=crs,
+                  dst_transform=dst_transform @ Affine.translation(-cols_kept.start, -rows_kept.start),
+                  dst_crs=dst_crs, resampling=Resampling.nearest)
+        invented = mask[rows_kept, cols_kept] > 0
+    return DEM(dst, dst_transform, dst_crs, name, report, invented)
 
 
-def _trim_invalid_border(z: np.ndarray, transform: Affine):
-    """Drop outer rows/columns holding NaN (resampling edge effects)."""
+def _valid_window(z: np.ndarray) -> tuple[slice, slice]:
+    """(rows, cols) slices that drop the outer rows/columns holding NaN (resampling edge effects);
+    InputError where cells without data remain inside."""
     r0, r1, c0, c1 = 0, z.shape[0], 0, z.shape[1]
     while r1 - r0 > 2 and c1 - c0 > 2:
         block = z[r0:r1, c0:c1]
@@ -298,7 +308,6 @@ def _trim_invalid_border(z: np.ndarray, transform: Affine):
         if not any(bad):
             break
         r0, r1, c0, c1 = r0 + bad[0], r1 - bad[1], c0 + bad[2], c1 - bad[3]
-    z = z[r0:r1, c0:c1]
-    if not np.isfinite(z).all():
+    if not np.isfinite(z[r0:r1, c0:c1]).all():
         raise InputError("reprojection left cells without data inside the grid")
-    return np.ascontiguousarray(z), transform @ Affine.translation(c0, r0)
+    return slice(int(r0), int(r1)), slice(int(c0), int(c1))

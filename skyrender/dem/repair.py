@@ -57,16 +57,17 @@ COARSE_FILL_FACTOR = 16
 COARSE_FILL_SMOOTHING = 20
 
 
-def _fill(z: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, int]:
+def _fill(z: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """Interpolate the invalid cells of z from the valid ones (GDAL's inverse-distance fill); also
-    returns how many of them lie more than :data:`FAR_VOID_CELLS` from any valid cell (invented terrain).
+    returns where they lie more than :data:`FAR_VOID_CELLS` from any valid cell (invented terrain;
+    None where all are valid).
 
     Where the voids are large (:data:`GDAL_FILL_BUDGET`: a missing tile in a box of tiles), those far
     cells take a smooth surface filled on a grid :data:`COARSE_FILL_FACTOR` times coarser, and GDAL fills
     only the band between it and the data: in seconds instead of hours, and without GDAL's steps across a
     wide void."""
     if valid.all():
-        return z.astype(np.float64, copy=True), 0
+        return z.astype(np.float64, copy=True), None
     if not valid.any():
         raise InputError("DEM has no valid elevation at all")
     distance = ndimage.distance_transform_edt(~valid)
@@ -81,7 +82,7 @@ def _fill(z: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, int]:
         nearest = ndimage.distance_transform_edt(~valid, return_distances=False, return_indices=True)
         out[still] = z[tuple(i[still] for i in nearest)]
     out[valid] = z[valid]
-    return out, int(np.count_nonzero(far))
+    return out, far
 
 
 def _gdal_fill(z: np.ndarray, valid: np.ndarray, reach: float, smoothing: int = 0) -> np.ndarray:
@@ -122,7 +123,7 @@ def repair_elevation(z: np.ndarray, cell_size_m: float, nodata_mask: np.ndarray 
 
     Returns
     -------
-    (z_fixed float64 array, RepairReport)
+    (z_fixed float64 array, RepairReport, invented: bool array where the terrain is invented, or None)
     """
     z = np.asarray(z, dtype=np.float64)
     void = ~np.isfinite(z)
@@ -132,7 +133,8 @@ def repair_elevation(z: np.ndarray, cell_size_m: float, nodata_mask: np.ndarray 
     valid = ~void & ~implausible
     spikes = find_spikes(np.where(valid, z, 0.0), cell_size_m, valid)
     bad_spikes = implausible | spikes
-    fixed, far_cells = _fill(np.where(valid & ~spikes, z, 0.0), valid & ~spikes)
+    fixed, far = _fill(np.where(valid & ~spikes, z, 0.0), valid & ~spikes)
+    far_cells = 0 if far is None else int(np.count_nonzero(far))
     notes = []
     if void.any():
         notes.append(f"filled {int(void.sum())} void cells")
@@ -141,4 +143,5 @@ def repair_elevation(z: np.ndarray, cell_size_m: float, nodata_mask: np.ndarray 
                      "invented")
     if bad_spikes.any():
         notes.append(f"repaired {int(bad_spikes.sum())} spike cells")
-    return fixed, RepairReport(int(void.sum()), int(bad_spikes.sum()), tuple(notes), far_cells)
+    invented = far if far_cells else None
+    return fixed, RepairReport(int(void.sum()), int(bad_spikes.sum()), tuple(notes), far_cells), invented
