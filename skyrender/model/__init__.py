@@ -40,6 +40,8 @@ def build_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None, 
     t0 = time.perf_counter()
     seconds = {}
     features = find_peaks(dem, params.peaks)
+    if dem.invented is not None and len(features):  # no peak of terrain the DEM's loading made up
+        features = features.subset(~dem.is_invented(features.xyz[:, 0], features.xyz[:, 1]))
     if len(features) == 0 or not features.major.any():
         raise InputError(f"{dem.name}: no peaks found (a flat or featureless DEM, or radii larger than the DEM)")
     pivots = features.subset(features.major)
@@ -83,8 +85,9 @@ def model_cache_key(dem: DEM, params: ModelParams = ModelParams()) -> str:
 #: Bumped when a change of the code (not of the parameters) changes what a model holds, so that
 #: models cached before it are rebuilt: 2 = far horizons rendered with the per-shape frozen
 #: kernel (2d87ab4, 2026-12-02; before it, a model built in a process that had localized could
-#: hold wrongly replayed horizons); 3 = one bisected column per horizon bin (2026-12-04).
-CACHE_GENERATION = 3
+#: hold wrongly replayed horizons); 3 = one bisected column per horizon bin (2026-12-04); 4 = no peaks, viewpoints
+#: or far-horizon centres on terrain the DEM's loading invented (``DEM.invented``, 2026-12-05).
+CACHE_GENERATION = 4
 
 
 def cached_model(dem: DEM, params: ModelParams = ModelParams(), *, terrain=None, progress: bool = False) -> Model:

@@ -57,12 +57,17 @@ class Covisibility:
 
 
 def viewpoint_grid(dem, spacing: float, height: float) -> np.ndarray:
-    """(V, 3) camera positions on a regular grid over a DEM, ``height`` above its ground."""
+    """(V, 3) camera positions on a regular grid over a DEM, ``height`` above its ground; none on terrain
+    its loading invented (:attr:`~skyrender.dem.DEM.invented`: a missing tile, no data outside an outline),
+    where no camera stands and no statistic or far horizon means anything."""
     xmin, xmax, ymin, ymax = dem.extent
     xs = np.arange(xmin + spacing / 2, xmax, spacing)
     ys = np.arange(ymin + spacing / 2, ymax, spacing)
     xx, yy = np.meshgrid(xs, ys)
     x, y = xx.ravel(), yy.ravel()
+    if getattr(dem, "invented", None) is not None:
+        keep = ~dem.is_invented(x, y)
+        x, y = x[keep], y[keep]
     return np.column_stack([x, y, dem.ground(x, y) + height])
 
 
