@@ -58,7 +58,7 @@ bench-split: install
 #   --out experiments/ch1/fov-unknown-fast, and --side dev (all 21) --tag old-unknown --out experiments/ch1/fov-unknown-range)
 fit-photo-confidence: install
 	$(BIN)/python -m skyrender.training.localize_fit --fov-unknown-rows experiments/ch1/fov-unknown-fast/bench-real-train-fast.json \
-		experiments/ch1/fov-unknown-range/bench-real-dev-old-unknown.json
+		experiments/ch1/invented-terrain/bench-real-dev-unknown-merged.json
 
 # retrain the sky network and refit the boundary search on the training split (CPU, ~10 min);
 # reproduces skyrender/features/weights/ for the seed
