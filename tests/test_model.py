@@ -294,17 +294,20 @@ def test_a_fine_dem_renders_its_model_statistics_on_coarser_blocks():
     assert np.percentile(np.abs(diff), 90) < 2.0 and -1.0 < diff.mean() < -0.2
 
 
-def test_cached_models_live_under_the_cache_generation_and_load_as_built(tmp_path, monkeypatch):
+def test_cached_models_live_under_the_cache_generation_and_load_as_built(tmp_path, monkeypatch, capsys):
     """A model cached by code older than ``CACHE_GENERATION`` (a bare key directory) is not
-    reused: the cache reads and writes ``g<generation>/<key>`` only."""
+    reused: the cache reads and writes ``g<generation>/<key>`` only. With ``progress`` the build
+    (and only the build) says so on stderr."""
     from skyrender.model import CACHE_GENERATION, cached_model, model_cache_key
 
     monkeypatch.setenv("SKYRENDER_CACHE", str(tmp_path))
     dem = fractal_terrain(120, 50.0, seed=4)
     (tmp_path / model_cache_key(dem)).mkdir()  # an older generation's directory, empty: never read
-    built = cached_model(dem)
+    built = cached_model(dem, progress=True)
     where = tmp_path / f"g{CACHE_GENERATION}" / model_cache_key(dem)
     assert CACHE_GENERATION >= 2 and (where / "model.json").is_file()
-    again = cached_model(dem)
+    assert f"building the model of {dem.name} (120 x 120 cells; first use, cached in {where})" in capsys.readouterr().err
+    again = cached_model(dem, progress=True)
+    assert "building" not in capsys.readouterr().err
     np.testing.assert_array_equal(again.horizons.elevation, built.horizons.elevation)
     np.testing.assert_array_equal(again.features.xyz, built.features.xyz)
