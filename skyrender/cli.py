@@ -386,7 +386,7 @@ def _load_dem(dem, crs, cell_size, bounds=None):
             window = ()
         if len(window) != 4 or not all(np.isfinite(window)) or not (window[0] < window[2] and window[1] < window[3]):
             raise InputError(f"--dem-bounds must be W,S,E,N with W < E and S < N, got {bounds!r}")
-        if str(dem) in BUILTIN_DEMS or str(dem) == "builtin:naval2000" or str(dem).lower().endswith((".npy", ".npz")):
+        if str(dem) in BUILTIN_DEMS or str(dem).lower().endswith((".npy", ".npz")):
             raise InputError("--dem-bounds needs raster DEM files (.tif, .hgt, .asc, .vrt), not a built-in or numpy DEM")
     terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size, bounds=window)
     share = terrain_dem.repair.invented / terrain_dem.elevation.size

@@ -123,8 +123,7 @@ class DEM:
         x, y = np.broadcast_arrays(np.asarray(x, np.float64), np.asarray(y, np.float64))
         if self.invented is None:
             return np.zeros(x.shape, bool)
-        col, row = ~self.transform @ (x, y)
-        row, col = np.floor(row).astype(np.int64), np.floor(col).astype(np.int64)
+        col, row = (np.rint(v).astype(np.int64) for v in self.fractional_index(x, y))  # the nearest cell centre
         inside = (row >= 0) & (row < self.shape[0]) & (col >= 0) & (col < self.shape[1])
         out = np.zeros(x.shape, bool)
         out[inside] = self.invented[row[inside], col[inside]]

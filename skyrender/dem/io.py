@@ -285,16 +285,14 @@ def _reproject_to_utm(z, transform: Affine, crs: str, name: str, report: RepairR
     dst = np.full((height, width), np.nan, dtype=np.float64)
     reproject(z, dst, src_transform=transform, src_crs=crs, dst_transform=dst_transform, dst_crs=dst_crs,
               resampling=Resampling.bilinear, src_nodata=np.nan, dst_nodata=np.nan)
-    rows_kept, cols_kept = _valid_window(dst)
-    dst_transform = dst_transform @ Affine.translation(cols_kept.start, rows_kept.start)
-    dst = np.ascontiguousarray(dst[rows_kept, cols_kept])
-    if invented is not None:
+    if invented is not None:  # onto the same grid, nearest cell
         mask = np.zeros((height, width), np.uint8)
-        reproject(invented.astype(np.uint8), mask, src_transform=transform, src_crs=crs,
-                  dst_transform=dst_transform @ Affine.translation(-cols_kept.start, -rows_kept.start),
+        reproject(invented.astype(np.uint8), mask, src_transform=transform, src_crs=crs, dst_transform=dst_transform,
                   dst_crs=dst_crs, resampling=Resampling.nearest)
-        invented = mask[rows_kept, cols_kept] > 0
-    return DEM(dst, dst_transform, dst_crs, name, report, invented)
+    rows_kept, cols_kept = _valid_window(dst)
+    dst = np.ascontiguousarray(dst[rows_kept, cols_kept])
+    invented = None if invented is None else mask[rows_kept, cols_kept] > 0
+    return DEM(dst, dst_transform @ Affine.translation(cols_kept.start, rows_kept.start), dst_crs, name, report, invented)
 
 
 def _valid_window(z: np.ndarray) -> tuple[slice, slice]:

@@ -65,7 +65,7 @@ def viewpoint_grid(dem, spacing: float, height: float) -> np.ndarray:
     ys = np.arange(ymin + spacing / 2, ymax, spacing)
     xx, yy = np.meshgrid(xs, ys)
     x, y = xx.ravel(), yy.ravel()
-    if getattr(dem, "invented", None) is not None:
+    if dem.invented is not None:
         keep = ~dem.is_invented(x, y)
         x, y = x[keep], y[keep]
     return np.column_stack([x, y, dem.ground(x, y) + height])
