@@ -1,0 +1,106 @@
+"""Score the refined places counting the far skyline more than the near (a probe on stored refined poses, 2026-12-05).
+
+``python experiments/ch1/distance-trust/probe.py OUT.json [--places 4]``
+
+At the true place the photo departs from the SRTM skyline most where the terrain is near (ridges rounded by 90 m
+cells, trees on them: ``../near-skylines/``). The verification has a distance trust for renders
+(``ScoreParams.trust_near_m`` / ``trust_far_m``: near columns charged ``untrusted_px`` instead of their error), which
+the photo preset's ranking and the refined score do not use. For each of the 73 training-side rows
+(``../confidence-train-rows.json``, fov known) the best ``--places`` distinct places (> 1 km apart) among the refined
+poses are rendered with each column's terrain distance and scored against the extracted skyline with the plain score
+and with trust ramps (``charge``: untrusted share of a column charged ``untrusted_px``; ``drop``: the column's
+weight scaled by its trust). Reported per variant: photos whose best place lies within 1 km, and the margin
+1 - best / next place for right and wrong answers. The poses stay those refined under the plain score.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+
+import numpy as np
+
+from skyrender.benchmarks.real_localize import photo_skyline, refined_of, with_terrain
+from skyrender.camera import Intrinsics
+from skyrender.datasets.real_photos import REPO, items_on_side
+from skyrender.localizer import LocalizeParams
+from skyrender.localizer.pipeline import distinct_places
+from skyrender.localizer.verification import score_skylines, trust_of_distance
+from skyrender.render.skyline import render_skylines
+
+ROWS = os.path.join(REPO, "experiments", "ch1", "confidence-train-rows.json")
+#: (name, near m, far m, mode)
+VARIANTS = [("plain", 0.0, 0.0, "none"),
+            ("charge 500-4000", 500.0, 4000.0, "charge"), ("charge 1000-3000", 1000.0, 3000.0, "charge"),
+            ("charge 2000-8000", 2000.0, 8000.0, "charge"),
+            ("drop 500-4000", 500.0, 4000.0, "drop"), ("drop 1000-3000", 1000.0, 3000.0, "drop"),
+            ("drop 2000-8000", 2000.0, 8000.0, "drop"),
+            ("near only 0-2000", 0.0, 2000.0, "near"),
+            ("near x2 0-2000", 0.0, 2000.0, "boost2"), ("near x4 0-2000", 0.0, 2000.0, "boost4"),
+            ("near x2 0-5000", 0.0, 5000.0, "boost2"), ("near x4 0-5000", 0.0, 5000.0, "boost4")]
+
+
+def variant_scores(rendered, distance, sky, weights, score_params, near, far, mode) -> np.ndarray:
+    """(P,) scores of rendered skylines (P, W) with terrain distances (P, W) under one variant."""
+    if mode == "none":
+        return score_skylines(rendered, sky, weights, score_params)[0]
+    sp = dataclasses.replace(score_params, trust_near_m=near, trust_far_m=far)
+    d = np.where(np.isfinite(distance), distance, 1e9)
+    trust = trust_of_distance(d, sp)
+    if mode == "charge":
+        return score_skylines(rendered, sky, weights, sp, trust=trust)[0]
+    if mode == "near":  # the opposite: only the near columns
+        trust = 1.0 - trust
+    elif mode.startswith("boost"):  # near columns weighted up to this many times the far ones
+        trust = 1.0 + (float(mode[5:]) - 1.0) * (1.0 - trust)
+    return np.array([score_skylines(rendered[i][None], sky, weights * trust[i], sp)[0][0]
+                     for i in range(len(rendered))])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("out")
+    ap.add_argument("--places", type=int, default=4)
+    a = ap.parse_args()
+    rows = json.load(open(ROWS))["rows"]
+    items = {it.key: it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")}
+    params = LocalizeParams.for_photos()
+    out = []
+    for row, it, terrain in with_terrain(rows, items):
+        image, sky, weights = photo_skyline(it, params)
+        H, W = image.shape[:2]
+        poses = refined_of(row)
+        pick = distinct_places(poses, a.places)
+        k = np.array([[poses[i, 6], W / 2.0, H / 2.0] for i in pick])
+        rendered, distance = render_skylines(terrain, poses[pick, :6], Intrinsics(W, H, float(poses[pick[0], 6]), W / 2, H / 2),
+                                             per_pose_intrinsics=k, with_distance=True)
+        truth = np.asarray(row["truth_xy"])
+        near_share = [float(np.mean(np.where(np.isfinite(distance[j]), distance[j], 1e9) < 2000)) for j in range(len(pick))]
+        rec = {"photo": it.key, "dist_m": [float(np.hypot(*(poses[i, :2] - truth))) for i in pick],
+               "stored_px": [float(poses[i, 7]) for i in pick], "near2km_share": near_share, "scores": {}}
+        for name, near, far, mode in VARIANTS:
+            rec["scores"][name] = [float(s) for s in variant_scores(rendered, distance, sky, weights, params.score,
+                                                                    near, far, mode)]
+        out.append(rec)
+        print(it.key, [round(d / 1000, 1) for d in rec["dist_m"]],
+              {n: [round(s, 2) for s in v] for n, v in rec["scores"].items() if n in ("plain", "charge 500-4000")},
+              flush=True)
+    json.dump(out, open(a.out, "w"), indent=1)
+    for name, *_ in VARIANTS:
+        right, margins = 0, {True: [], False: []}
+        for rec in out:
+            s, d = np.array(rec["scores"][name]), np.array(rec["dist_m"])
+            b = int(np.argmin(s))
+            ok = d[b] <= 1000
+            right += ok
+            rest = np.delete(s, b)
+            if len(rest) and np.isfinite(rest.min()) and rest.min() > 0:
+                margins[bool(ok)].append(1 - s[b] / rest.min())
+        print(f"{name:18s}: best place within 1 km on {right} of {len(out)}; margin median right "
+              f"{np.median(margins[True]):.3f}, wrong {np.median(margins[False]):.3f}")
+
+
+if __name__ == "__main__":
+    main()
