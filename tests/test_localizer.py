@@ -955,27 +955,6 @@ def test_localizes_with_unknown_field_of_view(scene, views):
     assert result.fov == pytest.approx(54.0, abs=0.75)
 
 
-def test_the_final_refinements_follow_the_fov_mode(scene, views):
-    """``final_refinements_fov_unknown`` stands in for ``final_refinements`` when the fov is unknown (the photo
-    preset: 16 by each ranking with the fov known, 8 with it unknown, whose searches at 7 fovs take the time):
-    a far-horizon search refines at most that many by each of its two rankings, and with the fov given the
-    other count holds."""
-    from dataclasses import replace
-
-    photo = LocalizeParams.for_photos()
-    assert photo.for_fov(False) is photo and photo.for_fov(True).final_refinements == 8
-    assert photo.final_refinements == 16 and photo.for_fov(True).min_confidence == photo.min_confidence
-    _, terrain, model = scene
-    pose = views.poses[4]
-    params = replace(LocalizeParams(), max_hypotheses=0, escalate_refinements=0, rescore_refinements=0,
-                     final_refinements=3, final_refinements_fov_unknown=1, fov_candidates=(50.0, 60.0),
-                     horizon_fov_step=())
-    image = _photo(terrain, pose)
-    unknown = localize(image, model, 2.0, None, terrain=terrain, params=params)
-    known = localize(image, model, 2.0, 60.0, terrain=terrain, params=params)
-    assert 1 <= unknown.stats.refined <= 2 < known.stats.refined <= 6
-
-
 def test_a_telephoto_range_searched_apart_when_the_fov_is_unknown():
     """The photo preset's unknown-fov search never comes below 30 deg; the telephoto range
     (``telephoto_fovs``, an option) searches 14 and 21 deg apart, probing by ratios: a 200 mm lens

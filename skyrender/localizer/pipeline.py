@@ -93,12 +93,6 @@ PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN = float(_FIT.get("min_confidence_fov_unknown", 
 #: The photo confidence's runner-up is the best refined pose farther than this (m) from the
 #: answer, chosen with the logistic on the training photos (``localize_fit``).
 PHOTO_RUNNER_UP_M = float(_FIT.get("runner_up_m", 1000.0))
-#: The photo preset refines this many far-horizon candidates by each ranking at the end (fov known; 8 with the fov
-#: unknown, whose searches at 7 fovs take the time): 8 before 2026-12-05. A wrong answer is one look-alike among
-#: several, and refining more candidates finds the next as its runner-up, while a right answer's runner-up stays
-#: where it was: on the 73 CH1 training-side photos the same 45 within 1 km, the wrong answers' margins shrink
-#: (IMG_5242 0.25 -> 0.15) and the right ones' hold (experiments/ch1/refine-more/)
-PHOTO_FINAL_REFINEMENTS = 16
 #: Real photographs stand nearly upright (hand-held, EXIF orientation applied): the camera roll
 #: the photo preset's alignment and least squares may fit (deg; CH1 training oracle fits: -5.4..3.0).
 PHOTO_MAX_SWING_DEG = 8.0
@@ -122,8 +116,7 @@ class LocalizeParams:
     verify_stride: int = 4  # every n-th column in the verification renders
     confidence_power: float = 1.0  # column weights = the skyline's per-column confidence (>= 0.05) to this power
     refine_per_chunk: int = 1  # best new candidates (by each score) refined after each chunk
-    final_refinements: int = 3  # distinct candidates refined at the end (by each ranking)
-    final_refinements_fov_unknown: int | None = None  # ... with the fov unknown (None: final_refinements)
+    final_refinements: int = 3  # distinct candidates refined at the end
     max_refinements: int = 16  # refinements of three-point candidates in all (each ~0.3 s)...
     max_horizon_refinements: int = 8  # ...and of far-horizon ones, each budget apart: neither crowds out the other
     # before abstaining, the best far-horizon candidates not yet refined, this many by each ranking, are refined
@@ -199,13 +192,6 @@ class LocalizeParams:
     # (bench-localize view 7: the right hypothesis solved 283 m off, verified 272nd of 318; swept, first at 4 m)
     weak_sweep: WeakSweepParams = field(default_factory=WeakSweepParams)
 
-    def for_fov(self, fov_unknown: bool) -> "LocalizeParams":
-        """These parameters as a localization with the fov known or unknown uses them:
-        ``final_refinements_fov_unknown`` in place of ``final_refinements`` where set."""
-        if fov_unknown and self.final_refinements_fov_unknown is not None:
-            return replace(self, final_refinements=self.final_refinements_fov_unknown)
-        return self
-
     def abstain_below(self, fov_unknown: bool) -> float:
         """The confidence an answer needs: ``min_confidence``, or with the fov unknown
         ``min_confidence_fov_unknown`` where set."""
@@ -218,9 +204,8 @@ class LocalizeParams:
         """Real photographs, where the DEM never matches exactly (the oracle fit at the
         true position leaves 1.4-7.4 px, ``make oracle``): the far-horizon search turns
         the skyline into directions for tilts from -10 to +30 deg, fits offset and slope
-        only, and the best :data:`PHOTO_FINAL_REFINEMENTS` of it by its own cost and as many by
-        verification score are refined (8 and 8 with the fov unknown); the skyline comes from
-        ``select`` (the learned extractor, or the per-photo mixtures
+        only, and the best 8 of it by its own cost and 8 by verification score are
+        refined; the skyline comes from ``select`` (the learned extractor, or the per-photo mixtures
         where they part from it and are surer: on the 21 CH1 dev photos 13 within 1 km against 12
         with the learned extractor alone, ``experiments/ch1/select/``). Three-point hypotheses
         are off (on CH1 their peaks are rarely DEM peaks; generating them took 10-30 s). The refined scores of right and
@@ -233,8 +218,7 @@ class LocalizeParams:
         The camera roll stays within :data:`PHOTO_MAX_SWING_DEG` in the verification's alignment
         and the refinement: wrong places fitted with 10-50 deg of it (held in the far-horizon
         fit too, ``HorizonSearchParams.max_swing_deg``, it lost a confident answer on the CH1 dev photos)."""
-        return cls(skyline_method="select", max_hypotheses=0, final_refinements=PHOTO_FINAL_REFINEMENTS,
-                   final_refinements_fov_unknown=8, max_refinements=4,
+        return cls(skyline_method="select", max_hypotheses=0, final_refinements=8, max_refinements=4,
                    max_horizon_refinements=16, escalate_refinements=0, rescore_refinements=0,
                    # fov unknown: 3 coarse fovs and 4 probes instead of 5 and 6 (the refinement fits the focal
                    # length): on 20 training photos the same or better answers in 41.0 s instead of 64.7 s
@@ -603,7 +587,6 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     if not (math.isfinite(height) and height >= 0):
         raise InputError(f"camera height above ground must be >= 0 m, got {height}")
     t_start = time.perf_counter()
-    params = params.for_fov(fov is None)
     stats = LocalizeStats()
     with stats.timed("image_features"):
         sky, weights, W, H = _image_skyline(image, skyline, params.skyline_params(), params.confidence_power)
