@@ -243,6 +243,61 @@ def photo_skyline(item, params=None) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return image, ext.skyline.astype(np.float64), column_weights(ext.confidence, params.confidence_power)
 
 
+def stored_places(rows: list[dict] | None = None, items: dict | None = None, places: int = 4,
+                  with_distance: bool = False, params=None):
+    """The frame of the probes that score stored answers again: for each row (rows come place by place;
+    ``items`` as for :func:`with_terrain`; None: the shipped confidence's 73 training-side rows,
+    ``localize_fit.TRAINING_ROWS_FILE``, and the training side's CH1 photos), its best ``places`` distinct
+    places (more than 1 km apart, :func:`~skyrender.localizer.pipeline.distinct_places`) among its refined
+    poses, rendered with their own focal lengths. Yields (row, item, skyline (W,), column weights (W,) — the
+    photo as the photo preset (``params``) sees it, :func:`photo_skyline` — the places' poses (P, 8), their
+    rendered skylines (P, W), and with ``with_distance`` each column's terrain distance (P, W, m), else None)."""
+    from ..camera import Intrinsics
+    from ..localizer.pipeline import distinct_places
+    from ..render.skyline import render_skylines
+
+    if rows is None:
+        from ..training.localize_fit import TRAINING_ROWS_FILE
+
+        with open(TRAINING_ROWS_FILE) as f:
+            rows = json.load(f)["rows"]
+    if items is None:
+        items = {it.key: it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")}
+    for row, it, terrain in with_terrain(rows, items):
+        image, sky, weights = photo_skyline(it, params)
+        H, W = image.shape[:2]
+        poses = refined_of(row)
+        picked = poses[distinct_places(poses, places)]
+        k = np.column_stack([picked[:, 6], np.full(len(picked), W / 2.0), np.full(len(picked), H / 2.0)])
+        out = render_skylines(terrain, picked[:, :6], Intrinsics(W, H, float(picked[0, 6]), W / 2.0, H / 2.0),
+                              per_pose_intrinsics=k, with_distance=with_distance)
+        rendered, distance = out if with_distance else (out, None)
+        yield row, it, sky, weights, picked, rendered, distance
+
+
+def place_report(records: list[dict], names: list[str], out_path: str, right_m: float = 1000.0) -> None:
+    """Write probe records (``{"dist_m": [each place's distance to the truth, ...], "scores": {name: [each
+    place's score, ...]}}``, from :func:`stored_places`) to ``out_path`` (JSON) and print, for each score
+    ``name``, how many photos' best-scoring place lies within ``right_m`` and the median margin 1 - best / next
+    place's score of those photos and of the others (nan where none)."""
+    with open(out_path, "w") as f:
+        json.dump(records, f, indent=1)
+    width = max(len(n) for n in names)
+    for name in names:
+        right, margins = 0, {True: [], False: []}
+        for rec in records:
+            s, d = np.asarray(rec["scores"][name], np.float64), np.asarray(rec["dist_m"], np.float64)
+            b = int(np.argmin(s))
+            ok = bool(d[b] <= right_m)
+            right += ok
+            rest = np.delete(s, b)
+            if len(rest) and np.isfinite(rest.min()) and rest.min() > 0:
+                margins[ok].append(1.0 - s[b] / rest.min())
+        med = {k: float(np.median(v)) if v else float("nan") for k, v in margins.items()}
+        print(f"{name:{width}s}: best place within {right_m:.0f} m on {right} of {len(records)}; margin median "
+              f"right {med[True]:.3f}, wrong {med[False]:.3f}")
+
+
 def with_part_margins(rows: list[dict], items: dict, params=None) -> list[dict]:
     """``rows``, each given a ``part_margin`` where it has refined poses but no part margin: the
     photo-confidence cue :func:`~skyrender.localizer.pipeline.answer_part_margin` of its refined poses

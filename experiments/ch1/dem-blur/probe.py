@@ -15,21 +15,14 @@ margin 1 - best / best beyond 1 km for right and wrong answers.
 from __future__ import annotations
 
 import argparse
-import json
-import os
 
 import numpy as np
 from scipy.ndimage import gaussian_filter1d
 
-from skyrender.benchmarks.real_localize import photo_skyline, refined_of, with_terrain
-from skyrender.camera import Intrinsics
-from skyrender.datasets.real_photos import REPO, items_on_side
+from skyrender.benchmarks.real_localize import place_report, stored_places
 from skyrender.localizer import LocalizeParams
-from skyrender.localizer.pipeline import distinct_places
 from skyrender.localizer.verification import score_skylines
-from skyrender.render.skyline import render_skylines
 
-ROWS = os.path.join(REPO, "experiments", "ch1", "confidence-train-rows.json")
 CELL_M = 90.0
 SIGMAS = np.arange(0.0, 30.01, 0.5)
 
@@ -54,26 +47,19 @@ def main() -> None:
     ap.add_argument("--places", type=int, default=4)
     ap.add_argument("--cells", type=float, nargs="+", default=[0.5, 1.0])
     a = ap.parse_args()
-    rows = json.load(open(ROWS))["rows"]
-    items = {it.key: it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")}
     params = LocalizeParams.for_photos()
     out = []
-    for row, it, terrain in with_terrain(rows, items):
-        image, sky, weights = photo_skyline(it, params)
-        H, W = image.shape[:2]
+    for row, it, sky, weights, places, rendered, distance in stored_places(places=a.places, with_distance=True,
+                                                                           params=params):
+        W = len(sky)
         levels = blurred_levels(sky)
-        poses = refined_of(row)
-        pick = distinct_places(poses, a.places)
-        k = np.array([[poses[i, 6], W / 2.0, H / 2.0] for i in pick])
-        rendered, distance = render_skylines(terrain, poses[pick, :6], Intrinsics(W, H, float(poses[pick[0], 6]), W / 2, H / 2),
-                                             per_pose_intrinsics=k, with_distance=True)
         truth = np.asarray(row["truth_xy"])
-        rec = {"photo": it.key, "dist_m": [float(np.hypot(*(poses[i, :2] - truth))) for i in pick],
-               "stored_px": [float(poses[i, 7]) for i in pick], "scores": {}}
+        rec = {"photo": it.key, "dist_m": [float(np.hypot(*(p[:2] - truth))) for p in places],
+               "stored_px": [float(p[7]) for p in places], "scores": {}}
         for c in [0.0] + list(a.cells):
             scores = []
-            for j, i in enumerate(pick):
-                sigma = np.clip(c * poses[i, 6] * CELL_M / np.where(np.isfinite(distance[j]), distance[j], 1e9), 0, 30)
+            for j, p in enumerate(places):
+                sigma = np.clip(c * p[6] * CELL_M / np.where(np.isfinite(distance[j]), distance[j], 1e9), 0, 30)
                 level = np.clip(np.round(sigma / 0.5).astype(int), 0, len(SIGMAS) - 1)
                 photo = levels[level, np.arange(W)]
                 scores.append(float(score_skylines(rendered[j][None], photo, weights, params.score)[0][0]))
@@ -81,18 +67,7 @@ def main() -> None:
         out.append(rec)
         print(it.key, {c: [round(s, 2) for s in v] for c, v in rec["scores"].items()},
               [round(d / 1000, 1) for d in rec["dist_m"]], flush=True)
-    json.dump(out, open(a.out, "w"), indent=1)
-    for c in ["0.0"] + [str(c) for c in a.cells]:
-        right, margins = 0, {True: [], False: []}
-        for rec in out:
-            s, d = np.array(rec["scores"][c]), np.array(rec["dist_m"])
-            b = int(np.argmin(s))
-            ok = d[b] <= 1000
-            right += ok
-            rest = np.delete(s, b)
-            margins[bool(ok)].append(1 - s[b] / rest.min() if len(rest) else 1.0)
-        print(f"c = {c}: best place within 1 km on {right} of {len(out)}; margin median right "
-              f"{np.median(margins[True]):.3f}, wrong {np.median(margins[False]):.3f}")
+    place_report(out, [str(c) for c in [0.0] + list(a.cells)], a.out)
 
 
 if __name__ == "__main__":

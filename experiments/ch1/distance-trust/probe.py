@@ -17,20 +17,13 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
-import os
 
 import numpy as np
 
-from skyrender.benchmarks.real_localize import photo_skyline, refined_of, with_terrain
-from skyrender.camera import Intrinsics
-from skyrender.datasets.real_photos import REPO, items_on_side
+from skyrender.benchmarks.real_localize import place_report, stored_places
 from skyrender.localizer import LocalizeParams
-from skyrender.localizer.pipeline import distinct_places
 from skyrender.localizer.verification import score_skylines, trust_of_distance
-from skyrender.render.skyline import render_skylines
 
-ROWS = os.path.join(REPO, "experiments", "ch1", "confidence-train-rows.json")
 #: (name, near m, far m, mode)
 VARIANTS = [("plain", 0.0, 0.0, "none"),
             ("charge 500-4000", 500.0, 4000.0, "charge"), ("charge 1000-3000", 1000.0, 3000.0, "charge"),
@@ -64,22 +57,14 @@ def main() -> None:
     ap.add_argument("out")
     ap.add_argument("--places", type=int, default=4)
     a = ap.parse_args()
-    rows = json.load(open(ROWS))["rows"]
-    items = {it.key: it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")}
     params = LocalizeParams.for_photos()
     out = []
-    for row, it, terrain in with_terrain(rows, items):
-        image, sky, weights = photo_skyline(it, params)
-        H, W = image.shape[:2]
-        poses = refined_of(row)
-        pick = distinct_places(poses, a.places)
-        k = np.array([[poses[i, 6], W / 2.0, H / 2.0] for i in pick])
-        rendered, distance = render_skylines(terrain, poses[pick, :6], Intrinsics(W, H, float(poses[pick[0], 6]), W / 2, H / 2),
-                                             per_pose_intrinsics=k, with_distance=True)
+    for row, it, sky, weights, places, rendered, distance in stored_places(places=a.places, with_distance=True,
+                                                                           params=params):
         truth = np.asarray(row["truth_xy"])
-        near_share = [float(np.mean(np.where(np.isfinite(distance[j]), distance[j], 1e9) < 2000)) for j in range(len(pick))]
-        rec = {"photo": it.key, "dist_m": [float(np.hypot(*(poses[i, :2] - truth))) for i in pick],
-               "stored_px": [float(poses[i, 7]) for i in pick], "near2km_share": near_share, "scores": {}}
+        near_share = [float(np.mean(np.where(np.isfinite(d), d, 1e9) < 2000)) for d in distance]
+        rec = {"photo": it.key, "dist_m": [float(np.hypot(*(p[:2] - truth))) for p in places],
+               "stored_px": [float(p[7]) for p in places], "near2km_share": near_share, "scores": {}}
         for name, near, far, mode in VARIANTS:
             rec["scores"][name] = [float(s) for s in variant_scores(rendered, distance, sky, weights, params.score,
                                                                     near, far, mode)]
@@ -87,19 +72,7 @@ def main() -> None:
         print(it.key, [round(d / 1000, 1) for d in rec["dist_m"]],
               {n: [round(s, 2) for s in v] for n, v in rec["scores"].items() if n in ("plain", "charge 500-4000")},
               flush=True)
-    json.dump(out, open(a.out, "w"), indent=1)
-    for name, *_ in VARIANTS:
-        right, margins = 0, {True: [], False: []}
-        for rec in out:
-            s, d = np.array(rec["scores"][name]), np.array(rec["dist_m"])
-            b = int(np.argmin(s))
-            ok = d[b] <= 1000
-            right += ok
-            rest = np.delete(s, b)
-            if len(rest) and np.isfinite(rest.min()) and rest.min() > 0:
-                margins[bool(ok)].append(1 - s[b] / rest.min())
-        print(f"{name:18s}: best place within 1 km on {right} of {len(out)}; margin median right "
-              f"{np.median(margins[True]):.3f}, wrong {np.median(margins[False]):.3f}")
+    place_report(out, [v[0] for v in VARIANTS], a.out)
 
 
 if __name__ == "__main__":

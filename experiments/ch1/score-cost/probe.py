@@ -14,20 +14,13 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
-import os
 
 import numpy as np
 
-from skyrender.benchmarks.real_localize import photo_skyline, refined_of, with_terrain
-from skyrender.camera import Intrinsics
-from skyrender.datasets.real_photos import REPO, items_on_side
+from skyrender.benchmarks.real_localize import place_report, stored_places
 from skyrender.localizer import LocalizeParams
-from skyrender.localizer.pipeline import distinct_places
 from skyrender.localizer.verification import column_errors, score_skylines
-from skyrender.render.skyline import render_skylines
 
-ROWS = os.path.join(REPO, "experiments", "ch1", "confidence-train-rows.json")
 #: (name, ScoreParams fields, squared)
 VARIANTS = [("shipped (cap 20, occluder 0.25)", {}, False),
             ("cap 5", {"cap_px": 5.0}, False), ("cap 10", {"cap_px": 10.0}, False), ("cap 40", {"cap_px": 40.0}, False),
@@ -48,39 +41,18 @@ def main() -> None:
     ap.add_argument("out")
     ap.add_argument("--places", type=int, default=4)
     a = ap.parse_args()
-    rows = json.load(open(ROWS))["rows"]
-    items = {it.key: it for side in ("train", "dev") for it in items_on_side(side) if it.key.startswith("ch1/")}
     params = LocalizeParams.for_photos()
     out = []
-    for row, it, terrain in with_terrain(rows, items):
-        image, sky, weights = photo_skyline(it, params)
-        H, W = image.shape[:2]
-        poses = refined_of(row)
-        pick = distinct_places(poses, a.places)
-        k = np.array([[poses[i, 6], W / 2.0, H / 2.0] for i in pick])
-        rendered = render_skylines(terrain, poses[pick, :6], Intrinsics(W, H, float(poses[pick[0], 6]), W / 2, H / 2),
-                                   per_pose_intrinsics=k)
+    for row, it, sky, weights, places, rendered, _ in stored_places(places=a.places, params=params):
         truth = np.asarray(row["truth_xy"])
-        rec = {"photo": it.key, "dist_m": [float(np.hypot(*(poses[i, :2] - truth))) for i in pick], "scores": {}}
+        rec = {"photo": it.key, "dist_m": [float(np.hypot(*(p[:2] - truth))) for p in places], "scores": {}}
         for name, fields, squared in VARIANTS:
             sp = dataclasses.replace(params.score, **fields)
             s = squared_scores(rendered, sky, weights, sp) if squared else score_skylines(rendered, sky, weights, sp)[0]
             rec["scores"][name] = [float(v) for v in s]
         out.append(rec)
         print(it.key, [round(d / 1000, 1) for d in rec["dist_m"]], flush=True)
-    json.dump(out, open(a.out, "w"), indent=1)
-    for name, *_ in VARIANTS:
-        right, margins = 0, {True: [], False: []}
-        for rec in out:
-            s, d = np.array(rec["scores"][name]), np.array(rec["dist_m"])
-            b = int(np.argmin(s))
-            ok = d[b] <= 1000
-            right += ok
-            rest = np.delete(s, b)
-            if len(rest) and rest.min() > 0:
-                margins[bool(ok)].append(1 - s[b] / rest.min())
-        print(f"{name:32s}: best place within 1 km on {right} of {len(out)}; margin median right "
-              f"{np.median(margins[True]):.3f}, wrong {np.median(margins[False]):.3f}")
+    place_report(out, [v[0] for v in VARIANTS], a.out)
 
 
 if __name__ == "__main__":
