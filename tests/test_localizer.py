@@ -601,6 +601,21 @@ def test_a_rescore_takes_the_runner_up_from_the_rows_refined_poses():
     assert out["status"] == "localized" and out["confidence"] == pytest.approx(1 / (1 + np.exp(-7.0)))
 
 
+def test_a_probe_report_counts_best_places_within_a_km_and_their_margins(tmp_path, capsys):
+    """place_report (the stored-pose probes' summary): per score, the photos whose best-scoring place lies
+    within 1 km, and the median margin 1 - best / next of those and of the others; the records are written."""
+    from skyrender.benchmarks.real_localize import place_report
+
+    records = [{"dist_m": [200.0, 40000.0], "scores": {"a": [1.0, 2.0], "b": [3.0, 2.0]}},
+               {"dist_m": [30000.0, 500.0, 9000.0], "scores": {"a": [1.0, 1.25, 4.0], "b": [5.0, 1.0, 0.0]}}]
+    place_report(records, ["a", "b"], str(tmp_path / "out.json"))
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "a: best place within 1000 m on 1 of 2; margin median right 0.500, wrong 0.200"
+    # b: photo 1's best place is 40 km off (margin 1/3); photo 2's is 9 km off, its next scores 1 (margin 1)
+    assert lines[1] == "b: best place within 1000 m on 0 of 2; margin median right nan, wrong 0.667"
+    assert json.loads((tmp_path / "out.json").read_text()) == records
+
+
 def test_the_answer_and_its_runner_up_stand_on_ground_a_person_stands_on():
     """refined_of / margin_of with the rows' refined_slopes and the bound their run used: a pose on a
     50 deg cliff is neither the answer nor the runner-up; where every pose is on a cliff all count; a

@@ -249,9 +249,10 @@ def stored_places(rows: list[dict] | None = None, items: dict | None = None, pla
     ``items`` as for :func:`with_terrain`; None: the shipped confidence's 73 training-side rows,
     ``localize_fit.TRAINING_ROWS_FILE``, and the training side's CH1 photos), its best ``places`` distinct
     places (more than 1 km apart, :func:`~skyrender.localizer.pipeline.distinct_places`) among its refined
-    poses, rendered with their own focal lengths. Yields (row, item, skyline (W,), column weights (W,) — the
-    photo as the photo preset (``params``) sees it, :func:`photo_skyline` — the places' poses (P, 8), their
-    rendered skylines (P, W), and with ``with_distance`` each column's terrain distance (P, W, m), else None)."""
+    poses, rendered with their own focal lengths (rows without refined poses are passed over). Yields (row,
+    item, skyline (W,), column weights (W,) — the photo as the photo preset (``params``) sees it,
+    :func:`photo_skyline` — the places' poses (P, 8), their rendered skylines (P, W), and with
+    ``with_distance`` each column's terrain distance (P, W, m), else None)."""
     from ..camera import Intrinsics
     from ..localizer.pipeline import distinct_places
     from ..render.skyline import render_skylines
@@ -268,6 +269,8 @@ def stored_places(rows: list[dict] | None = None, items: dict | None = None, pla
         H, W = image.shape[:2]
         poses = refined_of(row)
         picked = poses[distinct_places(poses, places)]
+        if not len(picked):
+            continue
         k = np.column_stack([picked[:, 6], np.full(len(picked), W / 2.0), np.full(len(picked), H / 2.0)])
         out = render_skylines(terrain, picked[:, :6], Intrinsics(W, H, float(picked[0, 6]), W / 2.0, H / 2.0),
                               per_pose_intrinsics=k, with_distance=with_distance)
