@@ -1,6 +1,6 @@
 """Would the inner-ridge support add to the photo confidence? (offline, on ``probe.py``'s output and the training rows)
 
-``python experiments/ch1/inner-ridges/confidence.py inner-train.json [--kept]``
+``python experiments/ch1/inner-ridges/confidence.py inner-train.json [--kept] [--rows ROWS.json]``
 
 The answer's support (its occluding contours on photo edges, less chance) beside the margin: AUC of each for right
 against wrong answers, and the logistic of margin + support judged a place at a time (``localize_fit.leave_place_out``'s
@@ -28,9 +28,10 @@ def confidence(feats: np.ndarray, logit) -> np.ndarray:
     return 1 / (1 + np.exp(-(logit[0] + feats @ np.asarray(logit[1:]))))
 
 
-def main(path: str, kept: bool = False) -> None:
+def main(path: str, kept: bool = False, rows_path: str = ROWS) -> None:
+    """``rows_path``: the training rows the support was probed on (``probe.py --rows``; default the shipped ones)."""
     support = {r["photo"]: r["places"][0]["support"] for r in json.load(open(path))}
-    rows = json.load(open(ROWS))["rows"]
+    rows = json.load(open(rows_path))["rows"]
     place_of, _ = places_of([])
     right = np.array([r["error_m"] <= 1000 for r in rows])
     margin = np.array([margin_of(r) for r in rows])
@@ -59,4 +60,5 @@ def main(path: str, kept: bool = False) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], "--kept" in sys.argv[2:])
+    args = sys.argv[1:]
+    main(args[0], "--kept" in args, args[args.index("--rows") + 1] if "--rows" in args else ROWS)
