@@ -70,8 +70,9 @@ def _fill(z: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray | No
         return z.astype(np.float64, copy=True), None
     if not valid.any():
         raise InputError("DEM has no valid elevation at all")
-    distance = ndimage.distance_transform_edt(~valid)
-    far = distance > FAR_VOID_CELLS
+    distance, box = _void_distance(valid)
+    far = np.zeros(valid.shape, bool)
+    far[box] = distance > FAR_VOID_CELLS
     if np.count_nonzero(~valid) * float(distance.max()) > GDAL_FILL_BUDGET:
         seeded = np.where(far, _coarse_fill(z, valid, COARSE_FILL_FACTOR), z)
         out = _gdal_fill(seeded, valid | far, FAR_VOID_CELLS + 2)
@@ -83,6 +84,16 @@ def _fill(z: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray | No
         out[still] = z[tuple(i[still] for i in nearest)]
     out[valid] = z[valid]
     return out, far
+
+
+def _void_distance(valid: np.ndarray) -> tuple[np.ndarray, tuple[slice, slice]]:
+    """Each cell's distance (cells) to the nearest valid one, over the voids' bounding box grown by one cell
+    (the box, as slices of the grid): the same as over the whole grid — a valid cell outside the box, moved
+    onto the box's border ring (valid), comes no farther — at a fraction of the cost where the voids are few
+    (6 s for a 7,065 x 5,737 mosaic, twice a load)."""
+    rows, cols = np.nonzero((~valid).any(axis=1))[0], np.nonzero((~valid).any(axis=0))[0]
+    box = (slice(max(rows[0] - 1, 0), rows[-1] + 2), slice(max(cols[0] - 1, 0), cols[-1] + 2))
+    return ndimage.distance_transform_edt(~valid[box]), box
 
 
 def _gdal_fill(z: np.ndarray, valid: np.ndarray, reach: float, smoothing: int = 0) -> np.ndarray:
