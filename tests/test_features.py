@@ -308,6 +308,35 @@ def test_sky_probability_fits_its_two_mixtures_the_same_on_one_core_or_all(monke
     np.testing.assert_allclose(_quadratic_field(coef, H, W), (design @ coef).astype(np.float32), rtol=1e-6, atol=1e-4)
 
 
+def test_work_on_a_block_thread_runs_its_own_blocks_and_calls_in_turn(monkeypatch):
+    """``blocks.concurrently`` and ``blocks.in_blocks`` start threads (a core each), but not from
+    one of their own workers: there the cores are its siblings', and nested work (the photo
+    extractor's mixtures inside each of its two skylines) runs in that worker's thread, in order."""
+    import threading
+
+    from skyrender.blocks import concurrently, in_blocks
+
+    monkeypatch.setattr("os.cpu_count", lambda: 2)
+    barrier = threading.Barrier(2, timeout=10)  # both outer calls must be running at once
+
+    def outer(name):
+        barrier.wait()
+        seen = []
+        in_blocks(10, 3, lambda lo, hi: seen.append((lo, threading.get_ident())))
+        inner = concurrently(lambda: threading.get_ident(), lambda: threading.get_ident())
+        return name, threading.get_ident(), seen, inner
+
+    results = concurrently(lambda: outer("a"), lambda: outer("b"))
+    assert [r[0] for r in results] == ["a", "b"]
+    assert len({r[1] for r in results} | {threading.get_ident()}) == 3  # two workers besides the caller
+    for _, ident, seen, inner in results:
+        assert seen == [(lo, ident) for lo in (0, 3, 6, 9)]  # every block, in order, in the worker's thread
+        assert inner == [ident, ident]
+    at_top = []
+    in_blocks(4, 1, lambda lo, hi: (barrier.wait(), at_top.append(threading.get_ident())))
+    assert len(set(at_top)) == 2  # from the caller's thread, blocks run on two threads at once
+
+
 def drawn_sky_photo() -> np.ndarray:
     """A 96 x 128 drawn photo: a blue gradient sky over noisy brown terrain below a wavy line."""
     rng = np.random.default_rng(5)
