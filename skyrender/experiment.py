@@ -242,12 +242,26 @@ def result_row(truth: np.ndarray, result, seconds: float, **extra) -> dict:
                "skyline": int(st["rejected"].get("skyline_limit", 0)),
                **{k: int(v) for k, v in st["rejected"].items() if k not in ("interfeature_visibility", "skyline_limit")}},
            "estimate": None, "position_error_m": None, "orientation_error_deg": None, **extra}
+    withheld = _withheld_answer(st["refined_poses"]) if not result.localized else None
+    if withheld is not None:  # what an abstention withheld: the best refined candidate (analysts look there next)
+        row["withheld_estimate"] = withheld
+        row["withheld_error_m"] = float(position_errors(np.array(withheld), truth)[0])
+    row["best_score"], row["runner_up_score"] = st["best_score"], st["runner_up_score"]
     if result.localized:
         row["estimate"] = [float(v) for v in result.pose]
         row["fov_estimate"] = result.fov
         row["position_error_m"] = float(position_errors(result.pose, truth)[0])
         row["orientation_error_deg"] = float(orientation_errors(result.pose, truth)[0])
     return row
+
+
+def _withheld_answer(refined_poses: list) -> list[float] | None:
+    """The pose (6,) of the best-scored refined candidate ([x, y, z, pan, tilt, swing, f_px, score px]
+    rows, :class:`~skyrender.localizer.pipeline.LocalizeStats`), None when none was refined."""
+    if not refined_poses:
+        return None
+    best = min(refined_poses, key=lambda r: r[7])
+    return [float(v) for v in best[:6]]
 
 
 # --- worker tasks (Dask) --------------------------------------------------------------------

@@ -100,6 +100,26 @@ def test_pose_errors_recall_and_summary():
     assert "| cfg | 3 | 5.0/5.0/5.0 | 0.100 | 2 | 1 | 1 | 2.0/4.0/6.0 | 5 | 3 | 1 | 33 % | 33 % | 67 % |" in table
 
 
+def test_a_result_row_of_an_abstention_keeps_the_withheld_answer_and_its_error():
+    """An abstention's row names the best-scored refined candidate (the place an analyst checks next) and its
+    error, so an experiment can count what was withheld; an answer's row has no such fields."""
+    from skyrender.experiment import result_row
+    from skyrender.localizer.pipeline import LocalizationResult, LocalizeStats
+
+    stats = LocalizeStats(best_score=1.5, runner_up_score=1.6,
+                          refined_poses=[[300.0, 400.0, 9.0, 10.0, 1.0, 0.0, 800.0, 2.5],
+                                         [30.0, 40.0, 9.0, 12.0, 2.0, 1.0, 800.0, 1.5]])
+    truth = np.array([0.0, 0.0, 9.0, 10.0, 1.0, 0.0])
+    row = result_row(truth, LocalizationResult("abstained", None, None, 0.2, 3.0, 0, stats), 3.0)
+    assert row["estimate"] is None and row["withheld_estimate"] == [30.0, 40.0, 9.0, 12.0, 2.0, 1.0]
+    assert row["withheld_error_m"] == 50.0 and (row["best_score"], row["runner_up_score"]) == (1.5, 1.6)
+    answered = result_row(truth, LocalizationResult("localized", np.array([30.0, 40.0, 9.0, 12.0, 2.0, 1.0]), 40.0,
+                                                    0.99, 3.0, 0, stats), 3.0)
+    assert answered["position_error_m"] == 50.0 and "withheld_error_m" not in answered
+    assert "withheld_error_m" not in result_row(truth, LocalizationResult("abstained", None, None, 0.0, 3.0, 0,
+                                                                           LocalizeStats()), 3.0)
+
+
 # --- datasets --------------------------------------------------------------------------------
 def test_a_dataset_holds_what_the_renderer_sees(tiny_dataset, tiny_scene):
     import cv2
