@@ -970,6 +970,23 @@ def test_localizes_with_unknown_field_of_view(scene, views):
     assert result.fov == pytest.approx(54.0, abs=0.75)
 
 
+def test_far_horizon_poses_are_moved_before_ranking_with_the_fov_given_and_not_unknown_where_so_set(scene, views):
+    """``horizon_rerank`` moves far-horizon poses to the best of a grid around them before they are ranked; with
+    ``rerank_fov_unknown`` False (the photo preset) only when the fov is given: a search at two fovs would pay it
+    twice. The view is localized either way."""
+    from dataclasses import replace
+
+    _, terrain, model = scene
+    pose = views.poses[4]
+    params = replace(LocalizeParams(), max_hypotheses=0, horizon_rerank=4, rerank_grid=3, rerank_half_m=150.0,
+                     rerank_stride=16, rerank_fov_unknown=False, fov_candidates=(60.0,), horizon_fov_step=())
+    given = localize(_photo(terrain, pose), model, 2.0, 60.0, terrain=terrain, params=params)
+    unknown = localize(_photo(terrain, pose), model, 2.0, None, terrain=terrain, params=params)
+    assert given.stats.seconds.get("rerank", 0.0) > 0.0 and "rerank" not in unknown.stats.seconds
+    for result in (given, unknown):
+        _assert_close(result, pose)
+
+
 def test_a_telephoto_range_searched_apart_when_the_fov_is_unknown():
     """The photo preset's unknown-fov search never comes below 30 deg; the telephoto range
     (``telephoto_fovs``, an option) searches 14 and 21 deg apart, probing by ratios: a 200 mm lens

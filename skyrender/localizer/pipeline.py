@@ -208,8 +208,9 @@ class LocalizeParams:
         """Real photographs, where the DEM never matches exactly (the oracle fit at the
         true position leaves 1.4-7.4 px, ``make oracle``): the far-horizon search turns
         the skyline into directions for tilts from -10 to +30 deg, fits offset and slope
-        only, and the best 8 of it by its own cost and 8 by verification score are
-        refined; the skyline comes from ``select`` (the learned extractor, or the per-photo mixtures
+        only, every pose it finds is moved to the best of a grid around it (with the fov given), and
+        the best 8 of them by its own cost and 8 by verification score are refined; the skyline
+        comes from ``select`` (the learned extractor, or the per-photo mixtures
         where they part from it and are surer: on the 21 CH1 dev photos 13 within 1 km against 12
         with the learned extractor alone, ``experiments/ch1/select/``). Three-point hypotheses
         are off (on CH1 their peaks are rarely DEM peaks; generating them took 10-30 s). The refined scores of right and
