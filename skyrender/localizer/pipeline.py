@@ -239,10 +239,11 @@ class LocalizeParams:
                    # every far-horizon pose moved to the best of a 7 x 7 grid +-300 m around it (renders on every 32nd
                    # column) before the best are refined: a pose a few hundred metres from a camera under ridges
                    # 1-4 km away scores like a wrong place where it lies. On CH1-like renders of a DEM that is the
-                   # world (experiments/dem-mismatch/, Glarus 1") 15 -> 16 of 16 best places within 1 km; on the 73 CH1
-                   # training-side photos 45 -> 50, 41 right answers kept above the refitted threshold instead of 32
-                   # (experiments/ch1/rerank-all/); 25 s a photo instead of 15. Not with the fov unknown: its two
-                   # best fovs would pay it twice, and its threshold (1.00) answers nothing either way
+                   # world (experiments/dem-mismatch/: Glarus 1", Big Tujunga 30 m) 24 -> 29 of 32 best places
+                   # within 1 km; on the 73 CH1 training-side photos 45 -> 50, 41 right answers kept above the
+                   # refitted threshold instead of 32 (experiments/ch1/rerank-all/); 25 s a photo instead of 15.
+                   # Not with the fov unknown: its two best fovs would pay it twice, and its threshold (1.00)
+                   # answers nothing either way
                    horizon_rerank=PHOTO_HORIZON_RERANK, rerank_grid=7, rerank_half_m=300.0, rerank_stride=32,
                    rerank_fov_unknown=False,
                    horizon=HorizonSearchParams(tilts=(-10.0, 0.0, 10.0, 20.0, 30.0), terms=2, rank_by_cost=True))
