@@ -987,6 +987,18 @@ def test_far_horizon_poses_are_moved_before_ranking_with_the_fov_given_and_not_u
         _assert_close(result, pose)
 
 
+def test_the_re_ranking_renders_as_many_columns_on_a_photo_of_any_width():
+    """The photo preset's re-ranking renders every 32nd column of a 1,024-wide CH1 photo; a 12 MP phone photo (4,032
+    columns) as many columns, not four times as many; without a stride of its own, the verification's."""
+    from dataclasses import replace
+
+    from skyrender.localizer.pipeline import rerank_columns
+
+    photo = LocalizeParams.for_photos()
+    assert [rerank_columns(photo, w) for w in (1024, 4032, 640, 16)] == [32, 126, 20, 1]
+    assert rerank_columns(replace(photo, rerank_stride=None), 4032) == photo.verify_stride
+
+
 def test_a_telephoto_range_searched_apart_when_the_fov_is_unknown():
     """The photo preset's unknown-fov search never comes below 30 deg; the telephoto range
     (``telephoto_fovs``, an option) searches 14 and 21 deg apart, probing by ratios: a 200 mm lens

@@ -183,7 +183,9 @@ class LocalizeParams:
     horizon_rerank: int = 0
     rerank_half_m: float = 250.0
     rerank_grid: int = 5
-    rerank_stride: int | None = None  # the re-ranking's renders on every n-th column (None: verify_stride)
+    # the re-ranking's renders on every n-th column of a photo SCORE_REFERENCE_WIDTH_PX wide, in proportion on
+    # others (a 12 MP photo's 4,032 columns as many renders as CH1's 1,024; None: verify_stride, not scaled)
+    rerank_stride: int | None = None
     rerank_fov_unknown: bool = True  # ... with the fov unknown too (False: only with the fov given)
     refine_fov: bool = False  # a given fov is only a start (e.g. from EXIF): refinement fits the focal length too,
     # ... within this fraction of the given one. Not in the photo preset: on the CH1 training side it brought right
@@ -765,8 +767,16 @@ def rerank_far_horizon(terrain, poses: np.ndarray, score: np.ndarray, second: np
     k = params.horizon_rerank
     pick = np.unique(np.r_[np.argsort(score, kind="stable")[:k], np.argsort(second, kind="stable")[:k]])
     moved, rescored = local_rescore(terrain, poses[pick], intrinsics, height, sky, weights, params.rerank_half_m,
-                                    params.rerank_grid, params.rerank_stride or params.verify_stride, params.score)
+                                    params.rerank_grid, rerank_columns(params, intrinsics.width), params.score)
     return pick, moved, rescored
+
+
+def rerank_columns(params: LocalizeParams, width_px: int) -> int:
+    """The re-ranking's column stride on a photo ``width_px`` wide: ``params.rerank_stride`` scaled from
+    :data:`SCORE_REFERENCE_WIDTH_PX` (at least 1), or ``params.verify_stride`` where that is None."""
+    if params.rerank_stride is None:
+        return params.verify_stride
+    return max(1, int(round(params.rerank_stride * width_px / SCORE_REFERENCE_WIDTH_PX)))
 
 
 def _screen_chunk(search: _Search, chunk: Hypotheses, fov_i: float, keep_for_sweep: bool = False) -> None:
