@@ -9,10 +9,9 @@ import sys
 import numpy as np
 
 from skyrender.camera import Intrinsics
-from skyrender.diagnostics.candidates import first_rank
+from skyrender.diagnostics.candidates import far_horizon_candidates, first_rank
 from skyrender.experiment import _Localizer, read_dataset
 from skyrender.localizer import LocalizeParams
-from skyrender.localizer.horizon_search import horizon_poses, standable_centres
 from skyrender.localizer.verification import verify_poses
 
 
@@ -27,9 +26,8 @@ def main(path: str, n: int) -> None:
         W, H = int(v["width"]), int(v["height"])
         k = Intrinsics.from_fov(float(v["fov"]), W, H)
         w = np.ones(W)
-        poses, cost = horizon_poses(model.horizons, sky, w, k, dem, float(v["height_above_ground"]), params.horizon,
-                                    centres=standable_centres(model.horizons, dem, params.max_ground_slope_deg))
-        score, _ = verify_poses(terrain, poses, k, sky, w, params.verify_stride, params=params.score)
+        poses, cost, score, _ = far_horizon_candidates(model, dem, terrain, sky, w, k, float(v["height_above_ground"]),
+                                                       params)
         truth = np.array([v[c] for c in ("x", "y", "z", "pan", "tilt", "swing")])
         truth_score, _ = verify_poses(terrain, truth[None], k, sky, w, params.verify_stride, params=params.score)
         d = np.hypot(poses[:, 0] - truth[0], poses[:, 1] - truth[1])

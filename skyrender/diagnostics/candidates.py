@@ -39,15 +39,27 @@ def first_rank(order: np.ndarray, distance: np.ndarray, radius: float) -> int | 
     return int(hit[0]) + 1 if len(hit) else None
 
 
+def far_horizon_candidates(model, dem, terrain, sky: np.ndarray, weights: np.ndarray, intrinsics, height: float,
+                           params):
+    """The far-horizon poses the photo preset (``params``) generates for a skyline (every tilt and window, on the
+    standable centres, before verification) and their rankings: (poses (K, 6), the search's cost (K,),
+    verification score (K,), trusted score (K,))."""
+    from ..localizer.horizon_search import horizon_poses, standable_centres
+    from ..localizer.verification import verify_poses
+
+    poses, cost = horizon_poses(model.horizons, sky, weights, intrinsics, dem, height, params.horizon,
+                                centres=standable_centres(model.horizons, dem, params.max_ground_slope_deg))
+    score, trusted = verify_poses(terrain, poses, intrinsics, sky, weights, params.verify_stride, params=params.score)
+    return poses, cost, score, trusted
+
+
 def probe(items, true_skyline: bool = False, progress: bool = True, params=None, rerank: int = 0,
           model_params=None) -> list[dict]:
     from ..benchmarks.real_localize import with_place
     from ..camera import Intrinsics
     from ..features import extract_skyline, load_photo
     from ..localizer import LocalizeParams
-    from ..localizer.horizon_search import horizon_poses, standable_centres
     from ..localizer.pipeline import column_weights, rerank_far_horizon
-    from ..localizer.verification import verify_poses
 
     params = params or LocalizeParams.for_photos()
     rows = []
@@ -61,9 +73,7 @@ def probe(items, true_skyline: bool = False, progress: bool = True, params=None,
             extracted = extract_skyline(image, params.skyline_params())
             sky, weights = extracted.skyline, column_weights(extracted.confidence, params.confidence_power)
         k = Intrinsics(W, H, it.focal_px, W / 2, H / 2)
-        poses, cost = horizon_poses(model.horizons, sky, weights, k, dem, 2.0, params.horizon,
-                                    centres=standable_centres(model.horizons, dem, params.max_ground_slope_deg))
-        score, trusted = verify_poses(terrain, poses, k, sky, weights, params.verify_stride, params=params.score)
+        poses, cost, score, trusted = far_horizon_candidates(model, dem, terrain, sky, weights, k, 2.0, params)
         tx, ty = (float(v) for v in dem.from_lonlat(it.lon, it.lat))
         distance = np.hypot(poses[:, 0] - tx, poses[:, 1] - ty)
         nearest = np.hypot(model.horizons.centres[:, 0] - tx, model.horizons.centres[:, 1] - ty).min()
