@@ -999,6 +999,40 @@ def test_the_re_ranking_renders_as_many_columns_on_a_photo_of_any_width():
     assert rerank_columns(replace(photo, rerank_stride=None), 4032) == photo.verify_stride
 
 
+def test_a_wide_photo_is_searched_on_its_skyline_reduced_and_answered_in_its_own_pixels(scene, views):
+    """``search_width`` (the photo preset's: 1,024): a photo twice as wide as it is searched on its skyline reduced to
+    that many columns — the reduced skyline is the one the same view rendered that wide has (within a tenth of a
+    pixel where the skyline is smooth), NaN columns stay NaN — and localized to the same place as the
+    narrower photo, with its intrinsics, skyline and rendered skyline in its own pixels."""
+    from dataclasses import replace
+
+    from skyrender.localizer.pipeline import reduce_skyline
+    from skyrender.render import render_skylines
+
+    _, terrain, model = scene
+    pose = views.poses[4]
+    wide = Intrinsics.from_fov(60.0, 1280, 960)
+    sky_wide = render_skylines(terrain, pose.array(), wide)
+    sky_narrow = render_skylines(terrain, pose.array(), K)
+    rows, w, width, height = reduce_skyline(sky_wide, np.ones(1280), 1280, 960, 640)
+    assert (width, height) == (640, 480) and np.array_equal(w, np.ones(640))
+    smooth = np.abs(np.diff(sky_narrow, prepend=sky_narrow[0])) < 1.0
+    assert np.nanmedian(np.abs(rows - sky_narrow)[smooth]) < 0.1
+    holes = sky_wide.copy()
+    holes[100:110] = np.nan
+    rows, _, _, _ = reduce_skyline(holes, np.ones(1280), 1280, 960, 640)
+    assert np.isnan(rows[50:55]).all() and np.isfinite(rows[:49]).all() and np.isfinite(rows[56:]).all()
+
+    params = replace(LocalizeParams(), max_hypotheses=0, fov_candidates=(60.0,), horizon_fov_step=(), search_width=640)
+    result = localize(_photo(terrain, pose, wide), model, 2.0, 60.0, terrain=terrain, params=params)
+    _assert_close(result, pose)
+    assert (result.intrinsics.width, result.intrinsics.height) == (1280, 960)
+    assert result.intrinsics.fov == pytest.approx(result.fov)
+    assert result.image_skyline.shape == result.rendered_skyline.shape == (1280,)
+    assert np.nanmedian(np.abs(result.rendered_skyline - result.image_skyline)) < 2.0
+    assert all(r[6] == pytest.approx(wide.f_px, rel=0.05) for r in result.stats.refined_poses)
+
+
 def test_a_telephoto_range_searched_apart_when_the_fov_is_unknown():
     """The photo preset's unknown-fov search never comes below 30 deg; the telephoto range
     (``telephoto_fovs``, an option) searches 14 and 21 deg apart, probing by ratios: a 200 mm lens

@@ -243,6 +243,18 @@ def photo_skyline(item, params=None) -> tuple[np.ndarray, np.ndarray, np.ndarray
     return image, ext.skyline.astype(np.float64), column_weights(ext.confidence, params.confidence_power)
 
 
+def photo_scaled_up(item, factor: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """(the photo, the photo ``factor`` times as wide and high (bicubic), its horizontal fov in degrees): a CH1
+    photo as a stand-in for a phone photo of that size (4: about 11-12.6 MP), the fov the same at either size."""
+    import cv2
+
+    from ..features import load_photo
+
+    image = load_photo(item.image_path)
+    big = cv2.resize(image, (image.shape[1] * factor, image.shape[0] * factor), interpolation=cv2.INTER_CUBIC)
+    return image, big, math.degrees(2.0 * math.atan(image.shape[1] / (2.0 * item.focal_px)))
+
+
 def stored_places(rows: list[dict] | None = None, items: dict | None = None, places: int = 4,
                   with_distance: bool = False, params=None):
     """The frame of the probes that score stored answers again: for each row (rows come place by place;

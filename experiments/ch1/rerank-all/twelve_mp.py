@@ -1,27 +1,23 @@
 """A CH1 validation photo scaled up 4x (4096 wide, ~11 MP), localized with the photo preset, fov known: the
 re-ranking with its stride scaled to the width (the preset), unscaled (every 32nd of 4,096 columns) and off (the
 preset before session 13). ``python experiments/ch1/rerank-all/twelve_mp.py ch1/_dsc0022_01024`` from the repository
-root (the place's model cached or built) → ``twelve_mp.txt``."""
+root (the place's model cached or built) → ``twelve_mp.txt`` (run at d1e86a7; since session 14 the preset searches such
+a photo on its skyline reduced to 1,024 columns, so a run now times that: ``../search-width/``)."""
 
 import math
 import sys
 import time
 from dataclasses import replace
 
-import cv2
-
-from skyrender.benchmarks.real_localize import with_place
+from skyrender.benchmarks.real_localize import photo_scaled_up, with_place
 from skyrender.datasets.real_photos import items_on_side
-from skyrender.features import load_photo
 from skyrender.localizer import LocalizeParams, localize
 
 
 def main(key: str) -> None:
     items = [it for it in items_on_side("validation") if it.key == key]
     for _, it, (dem, terrain, model) in with_place(items):
-        img = load_photo(it.image_path)
-        big = cv2.resize(img, (img.shape[1] * 4, img.shape[0] * 4), interpolation=cv2.INTER_CUBIC)
-        fov = math.degrees(2 * math.atan(img.shape[1] / (2 * it.focal_px)))
+        _, big, fov = photo_scaled_up(it, 4)
         tx, ty = dem.from_lonlat(it.lon, it.lat)
         photo = LocalizeParams.for_photos()
         for name, params in (("scaled stride (preset)", photo), ("stride 32 unscaled", replace(photo, rerank_stride=8)),
