@@ -1021,12 +1021,12 @@ def test_a_wide_photo_is_searched_on_its_skyline_reduced_and_answered_in_its_own
     holes = sky_wide.copy()
     holes[100:110] = np.nan
     rows, _, _, _ = reduce_skyline(holes, np.ones(1280), 1280, 960, 640)
-    assert np.isnan(rows[50:55]).all() and np.isfinite(rows[:49]).all() and np.isfinite(rows[56:]).all()
+    assert np.isnan(rows[50:55]).all() and np.isfinite(rows[:50]).all() and np.isfinite(rows[55:]).all()
 
     params = replace(LocalizeParams(), max_hypotheses=0, fov_candidates=(60.0,), horizon_fov_step=(), search_width=640)
     result = localize(_photo(terrain, pose, wide), model, 2.0, 60.0, terrain=terrain, params=params)
     _assert_close(result, pose)
-    assert (result.intrinsics.width, result.intrinsics.height) == (1280, 960)
+    assert result.stats.searched_width == 640 and (result.intrinsics.width, result.intrinsics.height) == (1280, 960)
     assert result.intrinsics.fov == pytest.approx(result.fov)
     assert result.image_skyline.shape == result.rendered_skyline.shape == (1280,)
     assert np.nanmedian(np.abs(result.rendered_skyline - result.image_skyline)) < 2.0

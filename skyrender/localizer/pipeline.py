@@ -307,6 +307,7 @@ class LocalizeStats:
     # (px)]; the places an analyst would check next, and what the diagnostics compare with the truth
     refined_poses: list = field(default_factory=list)
     refined_slopes: list = field(default_factory=list)  # the ground's slope (deg) under each refined pose
+    searched_width: int | None = None  # the skyline's columns the search ran on (LocalizeParams.search_width)
 
     def add_time(self, stage: str, seconds: float) -> None:
         self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
@@ -332,6 +333,7 @@ class LocalizeStats:
                 "seconds": {k: round(v, 4) for k, v in self.seconds.items()},
                 "peak_mb": {k: round(v, 1) for k, v in self.peak_mb.items()}, "rounds": list(self.rounds),
                 "refined_poses": [list(r) for r in self.refined_poses], "refined_slopes": list(self.refined_slopes),
+                "searched_width": self.searched_width,
                 "hypotheses_per_second": self.evaluated / solve if solve > 0 else 0.0}
 
 
@@ -619,6 +621,7 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
         sky, weights, W, H = photo_sky, photo_weights, photo_W, photo_H
         if params.search_width is not None and photo_W > params.search_width:
             sky, weights, W, H = reduce_skyline(photo_sky, photo_weights, photo_W, photo_H, params.search_width)
+        stats.searched_width = W
         peaks = image_peaks(sky, params)
     with stats.timed("terrain"):
         terrain = terrain if terrain is not None else Terrain(model.dem, curvature=curvature)
