@@ -188,8 +188,9 @@ class LocalizeParams:
     horizon_rerank: int = 0
     rerank_half_m: float = 250.0
     rerank_grid: int = 5
-    # the re-ranking's renders on every n-th column of a photo SCORE_REFERENCE_WIDTH_PX wide, in proportion on
-    # others (a 12 MP photo's 4,032 columns as many renders as CH1's 1,024; None: verify_stride, not scaled)
+    # the re-ranking's renders on every n-th column of a skyline SCORE_REFERENCE_WIDTH_PX wide, in proportion on
+    # others (None: verify_stride, not scaled). The photo preset searches no skyline wider than that (search_width),
+    # so there the scaling only thins the renders of a narrower photo
     rerank_stride: int | None = None
     rerank_fov_unknown: bool = True  # ... with the fov unknown too (False: only with the fov given)
     refine_fov: bool = False  # a given fov is only a start (e.g. from EXIF): refinement fits the focal length too,
