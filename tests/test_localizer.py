@@ -867,6 +867,28 @@ def test_cli_localize_prints_the_contract_json_and_writes_overlay_and_geojson(sc
                                                                                   "interfeature_visibility"}
 
 
+def test_cli_localize_takes_an_exif_fov_as_given(scene, views, model_dir, tmp_path, capsys):
+    """With ``--fov`` omitted, a photo's EXIF focal length (35 mm equivalent, whole millimetres: 30 mm is 59.97 deg
+    here) is the fov, used as a given one: the answer keeps it (refitting it, ``refine_fov``, let wrong places fit it
+    too on CH1: ``experiments/ch1/exif-fov/``)."""
+    from PIL import ExifTags, Image
+
+    _, terrain, _ = scene
+    pose = views.poses[2]
+    im = Image.fromarray(_photo(terrain, pose))
+    exif = im.getexif()
+    exif.get_ifd(ExifTags.IFD.Exif)[0xA405] = 30
+    im.save(tmp_path / "phone.jpg", exif=exif, quality=95)
+    code, out, err = _run(capsys, ["localize", tmp_path / "phone.jpg", "--model", model_dir, "--height", 2,
+                                   "--preset", "render", "--json", "--stats"])
+    assert code == 0, err
+    doc, stats = json.loads(out), json.loads(err.split("stats: ", 1)[1])
+    assert np.hypot(doc["x"] - pose.x, doc["y"] - pose.y) < POS_TOL_M
+    f_exif = 30 * 800 / np.hypot(36, 24)
+    assert doc["fov"] == pytest.approx(2 * np.degrees(np.arctan(320 / f_exif)), abs=1e-9)
+    assert stats["refined"] > 0 and all(r[6] == pytest.approx(f_exif * 1.0, rel=1e-9) for r in stats["refined_poses"])
+
+
 def test_cli_localize_abstains_with_exit_3(model_dir, tmp_path, capsys):
     from skyrender.viz import write_image
 
