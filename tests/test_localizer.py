@@ -886,7 +886,7 @@ def test_cli_localize_takes_an_exif_fov_as_given(scene, views, model_dir, tmp_pa
     assert np.hypot(doc["x"] - pose.x, doc["y"] - pose.y) < POS_TOL_M
     f_exif = 30 * 800 / np.hypot(36, 24)
     assert doc["fov"] == pytest.approx(2 * np.degrees(np.arctan(320 / f_exif)), abs=1e-9)
-    assert stats["refined"] > 0 and all(r[6] == pytest.approx(f_exif * 1.0, rel=1e-9) for r in stats["refined_poses"])
+    assert stats["refined"] > 0 and all(r[6] == pytest.approx(f_exif, rel=1e-9) for r in stats["refined_poses"])
 
 
 def test_cli_localize_abstains_with_exit_3(model_dir, tmp_path, capsys):
