@@ -193,12 +193,13 @@ class LocalizeParams:
     # so there the scaling only thins the renders of a narrower photo
     rerank_stride: int | None = None
     rerank_fov_unknown: bool = True  # ... with the fov unknown too (False: only with the fov given)
-    refine_fov: bool = False  # a given fov is only a start: every candidate's refinement fits the focal length too,
-    # ... within this fraction of the given one. Not for an EXIF fov (the CLI's until 2026-12-05: unbounded, on the CH1
-    # training side it answered 2 photos 1.7 and 69 km off at 0.98 and 0.95; experiments/ch1/exif-fov/), nor in the
-    # photo preset: on the CH1 training side it brought right
-    # answers closer at the one place whose given focal lengths are ~4 % short and nowhere else, and on validation it
-    # answered 2 photos 1.1-2.3 km wrong (experiments/ch1/refine-fov-known/)
+    # a given fov is only a start: every candidate's refinement fits the focal length too, within given_focal_range
+    # (a fraction) of the given one. Not for an EXIF fov (the CLI's until 2026-12-05: unbounded, on the CH1 training
+    # side it answered 2 photos 1.7 and 69 km off at 0.98 and 0.95; experiments/ch1/exif-fov/), nor in the photo
+    # preset: on the CH1 training side it brought right answers closer at the one place whose given focal lengths are
+    # ~4 % short and nowhere else, and on validation it answered 2 photos 1.1-2.3 km wrong
+    # (experiments/ch1/refine-fov-known/)
+    refine_fov: bool = False
     given_focal_range: float = math.inf
     score: ScoreParams = field(default_factory=ScoreParams)
     refine: RefineParams = field(default_factory=RefineParams)  # the refinement's search set-up
