@@ -23,7 +23,10 @@ from .errors import InputError
 app = typer.Typer(add_completion=False, no_args_is_help=True, pretty_exceptions_enable=False,
                   help="Camera pose from one mountain photograph and a DEM.")
 
-DemOpt = typer.Option(..., "--dem", help="DEM file (GeoTIFF, .hgt, .asc, .npy/.npz) or builtin:jacksboro")
+#: What a DEM argument may be (:func:`skyrender.dem.load_dem`)
+DEM_HELP = ("DEM file (GeoTIFF, .hgt, .asc, .npy/.npz), several joined by commas, a directory of tiles (with "
+            "--dem-bounds, those reaching the window), a VRT, or builtin:jacksboro")
+DemOpt = typer.Option(..., "--dem", help=DEM_HELP)
 CrsOpt = typer.Option(None, "--crs", help="CRS of a DEM file that has none, e.g. EPSG:31254")
 CellOpt = typer.Option(None, "--cell-size", help="metres per cell, for .npy/.npz DEMs")
 BoundsOpt = typer.Option(None, "--dem-bounds", help="W,S,E,N: read only this window of the DEM's raster files, in "
@@ -179,7 +182,7 @@ def skyline(
 
 @app.command()
 def model(
-    dem: str = typer.Argument(..., help="DEM file (GeoTIFF, .hgt, .asc, .npy/.npz) or builtin:jacksboro"),
+    dem: str = typer.Argument(..., help=DEM_HELP),
     out: Path = typer.Option(..., "--out", help="model directory to write"),
     major_radius: float = typer.Option(1800.0, help="a major peak is the highest within this radius (m)"),
     minor_radius: float = typer.Option(650.0, help="a minor peak is the highest within this radius (m)"),
@@ -329,7 +332,7 @@ def localize(
 
 @app.command()
 def mesh(
-    dem: str = typer.Argument(..., help="DEM file(s), a directory of tiles, a VRT, or builtin:jacksboro"),
+    dem: str = typer.Argument(..., help=DEM_HELP),
     out: Path = typer.Option(..., "--out", help="mesh file to write: .ply, .obj or .glb"),
     world: bool = typer.Option(False, "--world", help="world coordinates (default: local to the DEM centre, "
                                "as the float32 renderer uses them)"),
@@ -378,7 +381,7 @@ def _load_dem(dem, crs, cell_size, bounds=None):
     much of it is invented (voids far from any data: a missing tile in a box of tiles). ``bounds``: the
     ``--dem-bounds`` text, W,S,E,N in the raster files' CRS."""
     from .dem import load_dem
-    from .dem.io import BUILTIN_DEMS
+    from .dem.io import BUILTIN_DEMS, SkippedTilesWarning
 
     window = None
     if bounds is not None:
@@ -390,7 +393,12 @@ def _load_dem(dem, crs, cell_size, bounds=None):
             raise InputError(f"--dem-bounds must be W,S,E,N with W < E and S < N, got {bounds!r}")
         if str(dem) in BUILTIN_DEMS or str(dem).lower().endswith((".npy", ".npz")):
             raise InputError("--dem-bounds needs raster DEM files (.tif, .hgt, .asc, .vrt), not a built-in or numpy DEM")
-    terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size, bounds=window)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", SkippedTilesWarning)
+        terrain_dem = load_dem(dem, crs=crs, cell_size=cell_size, bounds=window)
+    for warning in caught:
+        if issubclass(warning.category, SkippedTilesWarning):
+            _warn(str(warning.message))
     share = terrain_dem.repair.invented / terrain_dem.elevation.size
     if share >= INVENTED_WARNING_SHARE:
         _warn(f"{terrain_dem.name}: {100 * share:.0f} % of the DEM lies far from any elevation data (a missing tile, "

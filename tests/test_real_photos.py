@@ -183,6 +183,84 @@ def test_mosaic_errors_name_the_problem(tmp_path):
         load_dem(tmp_path)
 
 
+def test_a_window_between_posts_reads_the_tiles_own_posts_in_either_order(tmp_path):
+    """``--dem-bounds`` whose corners fall between posts (as a photo's lon/lat +- a radius does): the window is
+    grown to whole cells, so the DEM holds the tiles' own posts where they stand, whichever tile comes first
+    (rasterio.merge on the raw corners moved every post up to half a cell, and one tile against the other)."""
+    import rasterio
+    from affine import Affine
+
+    from skyrender.dem import load_dem
+
+    rng = np.random.default_rng(2)
+    z = 1000 + np.cumsum(np.cumsum(rng.normal(0, 2, (80, 161)), 0), 1)
+    for name, cols, west in (("a.tif", slice(0, 81), 400_000.0), ("b.tif", slice(80, 161), 408_000.0)):
+        with rasterio.open(tmp_path / name, "w", driver="GTiff", width=81, height=80, count=1, dtype="float64",
+                           crs="EPSG:32632", transform=Affine(100, 0, west, 0, -100, 5_200_000)) as dst:
+            dst.write(z[:, cols], 1)
+    window = (401_234.5, 5_193_456.7, 412_345.6, 5_198_765.4)  # W,S,E,N between posts
+    for order in (["a.tif", "b.tif"], ["b.tif", "a.tif"]):
+        dem = load_dem([tmp_path / name for name in order], bounds=window)
+        assert dem.crs == "EPSG:32632" and dem.transform.a == 100.0
+        assert (dem.transform.c, dem.transform.f) == (401_200.0, 5_198_800.0)  # grown outward to whole cells
+        np.testing.assert_array_equal(dem.elevation, z[12:66, 12:124])
+
+
+def test_a_folder_of_mixed_tiles_mosaics_those_of_one_kind_reaching_the_window(tmp_path, monkeypatch, capsys):
+    """A folder as ``../shared/data/dem`` is: two adjacent tiles, a finer tile over part of them, a tile in UTM and
+    one far away. With a window, the tiles outside it are left out silently, the finer one with a warning (one
+    line from the command line), and the mosaic is the two tiles'; tiles listed one by one are merged or refused,
+    never chosen among; a mosaic too large to hold is refused before it is read."""
+    import warnings
+
+    import rasterio
+    from affine import Affine
+
+    from skyrender import cli
+    from skyrender.dem import io as dem_io
+    from skyrender.dem import load_dem
+    from skyrender.dem.io import SkippedTilesWarning
+    from skyrender.errors import InputError
+
+    step, half = 1.0 / 120, 1.0 / 240
+    rng = np.random.default_rng(1)
+    z = 1000 + np.cumsum(np.cumsum(rng.normal(0, 2, (121, 241)), 0), 1)
+    _write_geotiff(tmp_path / "west.tif", z[:, :121], 7.0 - half, 47.0 + half, step)
+    _write_geotiff(tmp_path / "east.tif", z[:, 120:], 8.0 - half, 47.0 + half, step)
+    _write_geotiff(tmp_path / "fine.tif", np.full((61, 61), 1500.0), 7.4, 46.8, step / 3)
+    _write_geotiff(tmp_path / "far.tif", z[:, :121], 86.0 - half, 28.0 + half, step)
+    with rasterio.open(tmp_path / "utm.tif", "w", driver="GTiff", width=50, height=50, count=1, dtype="float32",
+                       crs="EPSG:32632", transform=Affine(30, 0, 400_000, 0, -30, 5_200_000)) as dst:
+        dst.write(np.full((50, 50), 800.0, np.float32), 1)
+    window = (7.2, 46.2, 8.6, 46.8)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        folder = load_dem(tmp_path, bounds=window)
+    skipped = [str(w.message) for w in caught if issubclass(w.category, SkippedTilesWarning)]
+    assert len(skipped) == 1 and "fine.tif" in skipped[0] and "far.tif" not in skipped[0]
+    pair = load_dem([tmp_path / "west.tif", tmp_path / "east.tif"], bounds=window)
+    assert folder.shape == pair.shape and folder.transform.almost_equals(pair.transform)
+    np.testing.assert_allclose(folder.elevation, pair.elevation, atol=1e-3)
+    assert "mosaic of 2 tiles" in folder.name
+    with pytest.raises(InputError, match="different cell sizes"):
+        load_dem([tmp_path / "west.tif", tmp_path / "fine.tif"], bounds=window)
+    with pytest.raises(InputError, match="different CRSs"):
+        load_dem([tmp_path / "west.tif", tmp_path / "utm.tif"])
+    with pytest.raises(InputError, match="no tile reaches"):
+        load_dem(tmp_path, bounds=(100.0, 10.0, 101.0, 11.0))
+    # without a window the folder's most common kind is west, east and far, 79 degrees of longitude and 19 of
+    # latitude apart: 23 M cells of these coarse posts, billions of SRTM's
+    monkeypatch.setattr(dem_io, "MAX_MOSAIC_CELLS", 500_000)
+    with pytest.raises(InputError, match=r"23,\d\d\d,\d\d\d cells \(at most 500,000\).*--dem-bounds"):
+        load_dem(tmp_path)
+    assert load_dem(tmp_path, bounds=window).shape == pair.shape
+    monkeypatch.undo()
+    out = tmp_path / "t.ply"
+    assert cli.main(["mesh", str(tmp_path), "--dem-bounds", ",".join(map(str, window)), "--out", str(out)]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("skyrender: warning:") and "fine.tif" in err[0]
+
+
 def test_the_oracle_fit_of_a_ch1_photo_at_its_true_position():
     from skyrender.diagnostics.oracle import oracle_for_photo
 

@@ -76,7 +76,8 @@ def load_dem(path: str | os.PathLike | list | tuple | None = None, *, crs=None, 
         return _load_jacksboro(resolution)
     tiles = dem_tiles(path)
     if len(tiles) > 1 or bounds is not None:
-        return _load_mosaic(tiles, crs=crs, resolution=resolution, bounds=bounds)
+        folder = not isinstance(path, (list, tuple)) and os.path.isdir(os.fspath(path))
+        return _load_mosaic(tiles, crs=crs, resolution=resolution, bounds=bounds, from_folder=folder)
     path = tiles[0]
     ext = os.path.splitext(path)[1].lower()
     if ext in (".npy", ".npz"):
@@ -108,35 +109,111 @@ def dem_tiles(path) -> list[str]:
     return parts
 
 
-def _load_mosaic(paths: list[str], *, crs, resolution: float | None, bounds=None) -> DEM:
+#: The most cells a mosaic may have (a 3 x 3 block of 1-arc-second tiles has 117 M): more is refused before it is
+#: read, naming its size, instead of exhausting memory (SRTM tiles from two continents would make billions).
+MAX_MOSAIC_CELLS = 150_000_000
+
+
+class SkippedTilesWarning(UserWarning):
+    """Tiles of a DEM directory left out of its mosaic (another CRS or cell size than most of the tiles that
+    reach the window); the command line prints it as a warning."""
+
+
+def _overlaps(src_bounds, window) -> bool:
+    """Whether a raster's bounds and a (west, south, east, north) window share an area (the same CRS)."""
+    return (src_bounds.left < window[2] and window[0] < src_bounds.right
+            and src_bounds.bottom < window[3] and window[1] < src_bounds.top)
+
+
+def _covered_area(src_bounds, window) -> float:
+    """The area of a (west, south, east, north) window a raster's bounds cover (the same CRS); 1 without a
+    window, so that kinds of tiles are then compared by their counts."""
+    if window is None:
+        return 1.0
+    return (max(0.0, min(src_bounds.right, window[2]) - max(src_bounds.left, window[0]))
+            * max(0.0, min(src_bounds.top, window[3]) - max(src_bounds.bottom, window[1])))
+
+
+def _grid_kind(src) -> tuple[str, tuple[float, float]]:
+    """(CRS, cell size) of an open raster: the tiles of one mosaic must share both."""
+    return str(src.crs), tuple(round(abs(r), 12) for r in src.res)
+
+
+def _snap_window(window, transform: Affine) -> tuple[float, float, float, float]:
+    """A (west, south, east, north) window grown to whole cells of a north-up grid (``transform``: a tile's), so
+    that a merge reads the tiles' own posts: rasterio.merge starts its grid at the window's corner, and a corner
+    between posts gets each post's value up to half a cell away (45 m for SRTM3) and, at a seam, one tile's
+    posts shifted against the other's."""
+    x0, y0, rx, ry = transform.c, transform.f, transform.a, -transform.e
+    eps = 1e-6  # of a cell: a window already on the grid stays where it is
+    return (x0 + math.floor((window[0] - x0) / rx + eps) * rx, y0 - math.ceil((y0 - window[1]) / ry - eps) * ry,
+            x0 + math.ceil((window[2] - x0) / rx - eps) * rx, y0 - math.floor((y0 - window[3]) / ry + eps) * ry)
+
+
+def _tiles_to_merge(sources: list, paths: list[str], bounds, from_folder: bool, name: str) -> list:
+    """The open rasters a mosaic is merged from. With a window, only the tiles reaching into it (a folder of
+    tiles may hold far-away ones). Tiles of different CRSs or cell sizes cannot be merged: from a folder, the
+    kind covering most of the window is kept (without a window: the kind of most tiles; ties: the first file's) and
+    the others named in a
+    :class:`SkippedTilesWarning`; from tiles the user listed one by one, InputError."""
+    import warnings
+
+    keep = list(range(len(sources)))
+    if bounds is not None:
+        keep = [i for i in keep if _overlaps(sources[i].bounds, bounds)]
+        if not keep:
+            raise InputError(f"{name}: the window lies outside the tiles (no tile reaches into "
+                             f"{', '.join(f'{b:g}' for b in bounds)})")
+    kinds = [_grid_kind(sources[i]) for i in keep]
+    if len(set(kinds)) > 1:
+        if not from_folder:
+            if len({k[0] for k in kinds}) > 1:
+                raise InputError(f"{name}: the tiles are in different CRSs ({', '.join(sorted({k[0] for k in kinds}))})")
+            raise InputError(f"{name}: the tiles have different cell sizes")
+        reach = [_covered_area(sources[i].bounds, bounds) for i in keep]
+        common = max(kinds, key=lambda kind: (sum(r for r, k in zip(reach, kinds) if k == kind), kinds.count(kind)))
+        left_out = [os.path.basename(paths[i]) for i, k in zip(keep, kinds) if k != common]
+        keep = [i for i, k in zip(keep, kinds) if k == common]
+        warnings.warn(f"left out of the mosaic, their CRS or cell size not that of the other {len(keep)} tiles: "
+                      f"{', '.join(left_out)}", SkippedTilesWarning, stacklevel=2)
+    return [sources[i] for i in keep]
+
+
+def _load_mosaic(paths: list[str], *, crs, resolution: float | None, bounds=None, from_folder: bool = False) -> DEM:
     """Several raster tiles of one CRS merged into one grid (rasterio.merge), then loaded as
-    one DEM. Adjacent SRTM tiles share their edge row/column: the shared posts coincide."""
+    one DEM. Adjacent SRTM tiles share their edge row/column: the shared posts coincide.
+    ``from_folder``: the tiles are a directory's, which may hold other kinds (:func:`_tiles_to_merge`)."""
     import rasterio
     from rasterio.merge import merge
 
-    name = (f"mosaic of {len(paths)} tiles ({os.path.basename(paths[0])}, ...)" if len(paths) > 1
-            else os.path.basename(paths[0])) + (f" in {tuple(round(b, 4) for b in bounds)}" if bounds else "")
+    def mosaic_name(names: list[str]) -> str:
+        return ((f"mosaic of {len(names)} tiles ({os.path.basename(names[0])}, ...)" if len(names) > 1
+                 else os.path.basename(names[0])) + (f" in {tuple(round(b, 4) for b in bounds)}" if bounds else ""))
+
+    name = mosaic_name(paths)
     try:
         sources = [rasterio.open(p) for p in paths]
     except Exception as exc:
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise InputError(f"{name}: a tile cannot be read ({first})") from None
     try:
-        crss = {str(src.crs) for src in sources}
-        if len(crss) > 1:
-            raise InputError(f"{name}: the tiles are in different CRSs ({', '.join(sorted(crss))})")
-        res = {tuple(round(abs(r), 12) for r in src.res) for src in sources}
-        if len(res) > 1:
-            raise InputError(f"{name}: the tiles have different cell sizes")
-        file_crs = sources[0].crs
-        nodata = sources[0].nodata
+        tiles = _tiles_to_merge(sources, paths, bounds, from_folder, name)
+        name = mosaic_name([paths[sources.index(src)] for src in tiles])
+        file_crs = tiles[0].crs
+        nodata = tiles[0].nodata
         if bounds is not None:
-            west, south = min(src.bounds.left for src in sources), min(src.bounds.bottom for src in sources)
-            east, north = max(src.bounds.right for src in sources), max(src.bounds.top for src in sources)
-            if bounds[0] >= east or bounds[2] <= west or bounds[1] >= north or bounds[3] <= south:
-                raise InputError(f"{name}: the window lies outside the tiles ({west:g}..{east:g} x {south:g}..{north:g})")
+            bounds = _snap_window(bounds, tiles[0].transform)
+            west, south, east, north = bounds
+        else:
+            west, south = min(src.bounds.left for src in tiles), min(src.bounds.bottom for src in tiles)
+            east, north = max(src.bounds.right for src in tiles), max(src.bounds.top for src in tiles)
+        res_x, res_y = (abs(r) for r in tiles[0].res)
+        cells = round((east - west) / res_x) * round((north - south) / res_y)
+        if cells > MAX_MOSAIC_CELLS:
+            raise InputError(f"{name}: the mosaic would have {cells:,} cells (at most {MAX_MOSAIC_CELLS:,}); give a "
+                             "window (--dem-bounds) or fewer tiles")
         try:
-            data, transform = merge(sources, bounds=bounds, nodata=nodata if nodata is not None else -32768,
+            data, transform = merge(tiles, bounds=bounds, nodata=nodata if nodata is not None else -32768,
                                     masked=True)
         except Exception as exc:
             raise InputError(f"{name}: the tiles cannot be merged ({str(exc).splitlines()[0]})") from None
