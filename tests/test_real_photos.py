@@ -207,10 +207,10 @@ def test_a_window_between_posts_reads_the_tiles_own_posts_in_either_order(tmp_pa
 
 
 def test_a_folder_of_mixed_tiles_mosaics_those_of_one_kind_reaching_the_window(tmp_path, monkeypatch, capsys):
-    """A folder as ``../shared/data/dem`` is: two adjacent tiles, a finer tile over part of them, a tile in UTM and
-    one far away. With a window, the tiles outside it are left out silently, the finer one with a warning (one
-    line from the command line), and the mosaic is the two tiles'; tiles listed one by one are merged or refused,
-    never chosen among; a mosaic too large to hold is refused before it is read."""
+    """A folder as ``../shared/data/dem`` is: two adjacent tiles, a finer tile over part of them, a tile in UTM, a
+    grid with no CRS and a tile far away. With a window, the tiles outside it are left out silently, the finer one
+    and the grid with a warning (one line from the command line), and the mosaic is the two tiles'; tiles listed
+    one by one are merged or refused, never chosen among; a mosaic too large to hold is refused before it is read."""
     import warnings
 
     import rasterio
@@ -232,12 +232,15 @@ def test_a_folder_of_mixed_tiles_mosaics_those_of_one_kind_reaching_the_window(t
     with rasterio.open(tmp_path / "utm.tif", "w", driver="GTiff", width=50, height=50, count=1, dtype="float32",
                        crs="EPSG:32632", transform=Affine(30, 0, 400_000, 0, -30, 5_200_000)) as dst:
         dst.write(np.full((50, 50), 800.0, np.float32), 1)
+    # a grid with no CRS whose metres, read as degrees, cover the whole window
+    (tmp_path / "grid.asc").write_text("ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 30\nNODATA_value -9999\n"
+                                       + "1 2 3\n" * 3)
     window = (7.2, 46.2, 8.6, 46.8)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         folder = load_dem(tmp_path, bounds=window)
     skipped = [str(w.message) for w in caught if issubclass(w.category, SkippedTilesWarning)]
-    assert len(skipped) == 1 and "fine.tif" in skipped[0] and "far.tif" not in skipped[0]
+    assert len(skipped) == 1 and "fine.tif" in skipped[0] and "grid.asc" in skipped[0] and "far.tif" not in skipped[0]
     pair = load_dem([tmp_path / "west.tif", tmp_path / "east.tif"], bounds=window)
     assert folder.shape == pair.shape and folder.transform.almost_equals(pair.transform)
     np.testing.assert_allclose(folder.elevation, pair.elevation, atol=1e-3)

@@ -141,9 +141,9 @@ def _grid_kind(src) -> tuple[str, tuple[float, float]]:
 
 def _snap_window(window, transform: Affine) -> tuple[float, float, float, float]:
     """A (west, south, east, north) window grown to whole cells of a north-up grid (``transform``: a tile's), so
-    that a merge reads the tiles' own posts: rasterio.merge starts its grid at the window's corner, and a corner
-    between posts gets each post's value up to half a cell away (45 m for SRTM3) and, at a seam, one tile's
-    posts shifted against the other's."""
+    that a merge reads the tiles' own posts: rasterio.merge starts its grid at the window's corner, and from a
+    corner between posts every cell takes the nearest post, up to half a cell away (32 m east, 46 m north for
+    SRTM3 in the Alps), rounding one tile one way and its neighbour the other."""
     x0, y0, rx, ry = transform.c, transform.f, transform.a, -transform.e
     eps = 1e-6  # of a cell: a window already on the grid stays where it is
     return (x0 + math.floor((window[0] - x0) / rx + eps) * rx, y0 - math.ceil((y0 - window[1]) / ry - eps) * ry,
@@ -153,9 +153,9 @@ def _snap_window(window, transform: Affine) -> tuple[float, float, float, float]
 def _tiles_to_merge(sources: list, paths: list[str], bounds, from_folder: bool, name: str) -> list:
     """The open rasters a mosaic is merged from. With a window, only the tiles reaching into it (a folder of
     tiles may hold far-away ones). Tiles of different CRSs or cell sizes cannot be merged: from a folder, the
-    kind covering most of the window is kept (without a window: the kind of most tiles; ties: the first file's) and
-    the others named in a
-    :class:`SkippedTilesWarning`; from tiles the user listed one by one, InputError."""
+    kind covering most of the window is kept (without a window: the kind of most tiles; ties: the first file's; a
+    grid without a CRS only where no other reaches the window),
+    the others named in a :class:`SkippedTilesWarning`; from tiles the user listed one by one, InputError."""
     import warnings
 
     keep = list(range(len(sources)))
@@ -171,7 +171,9 @@ def _tiles_to_merge(sources: list, paths: list[str], bounds, from_folder: bool, 
                 raise InputError(f"{name}: the tiles are in different CRSs ({', '.join(sorted({k[0] for k in kinds}))})")
             raise InputError(f"{name}: the tiles have different cell sizes")
         reach = [_covered_area(sources[i].bounds, bounds) for i in keep]
-        common = max(kinds, key=lambda kind: (sum(r for r, k in zip(reach, kinds) if k == kind), kinds.count(kind)))
+        # a grid without a CRS counts last: its coordinates are not in the window's units, whatever they overlap
+        common = max(kinds, key=lambda kind: (kind[0] != "None", sum(r for r, k in zip(reach, kinds) if k == kind),
+                                              kinds.count(kind)))
         left_out = [os.path.basename(paths[i]) for i, k in zip(keep, kinds) if k != common]
         keep = [i for i, k in zip(keep, kinds) if k == common]
         warnings.warn(f"left out of the mosaic, their CRS or cell size not that of the other {len(keep)} tiles: "

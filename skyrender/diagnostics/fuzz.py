@@ -148,6 +148,22 @@ def _dem_files(work: str, rng: np.random.Generator, n: int) -> list[str]:
     return _with_mutants(files, valid, work, rng, n)
 
 
+def _dem_folders(work: str, rng: np.random.Generator, dems: list[str]) -> list[tuple[str, str | None]]:
+    """(folder, --dem-bounds or None) cases of DEM directories: every kind of DEM file together (a UTM GeoTIFF, a
+    grid without a CRS, numpy arrays, an SRTM tile, byte mutants of them), and the valid SRTM tile beside others,
+    with windows on it, beside it and nowhere."""
+    cases = []
+    for name, picked in (("mixed", [d for d in dems if rng.random() < 0.3]),
+                         ("tile", [d for d in dems if os.path.basename(d) in ("N46E007.hgt", "dem_plain.tif",
+                                                                              "dem_plain.asc")])):
+        folder = os.path.join(work, f"folder_{name}")
+        os.makedirs(folder)
+        for d in picked:
+            shutil.copy(d, folder)
+        cases += [(folder, None), (folder, "7.2,46.2,7.8,46.8"), (folder, "6.5,46.5,7.5,47.5"), (folder, "100,10,101,11")]
+    return cases
+
+
 def _image_files(work: str, rng: np.random.Generator, n: int) -> list[str]:
     """n image files: odd shapes and kinds, then byte mutations of PNG and JPEG photos."""
     import cv2
@@ -307,6 +323,10 @@ def make_cases(work: str, n: int, seed: int, valid_model: str) -> list[Case]:
                                                                   "--out", "r.png", "--json"], ("r.png",)))
     for d in dems[::4]:
         cases.append(Case(f"mesh {os.path.basename(d)}", ["mesh", d, "--out", "t.ply"], ("t.ply", "t.xml")))
+    for folder, bounds in _dem_folders(work, rng, dems):
+        cases.append(Case(f"mesh folder {os.path.basename(folder)} {bounds or ''}".strip(),
+                          ["mesh", folder, "--out", "t.ply"] + (["--dem-bounds", bounds] if bounds else []),
+                          ("t.ply", "t.xml")))
     for img in images:
         cases.append(Case(f"skyline {os.path.basename(img)}", ["skyline", img, "--json"]))
     for scene in _scene_files(work, rng, dems[::6], max(2, n // 40)):
