@@ -54,11 +54,11 @@ bench-split: install
 
 # refit the photo confidence of the localizer on the 73 CH1 photos of the training side (~40 min)
 # the fov-unknown threshold comes from the training rows localized that way (regenerate them with the localizer:
-# python -m skyrender.benchmarks.real_localize --side train --fov unknown --limit 20 --no-abstain --tag fast
-#   --out experiments/ch1/fov-unknown-fast, and --side dev (all 21) --tag old-unknown --out experiments/ch1/fov-unknown-range)
+# python -m skyrender.benchmarks.real_localize --side train --fov unknown --limit 20 --no-abstain --tag unknown-train
+#   --out experiments/ch1/dem-window/unknown, and --side dev (all 21) --tag unknown-dev)
 fit-photo-confidence: install
-	$(BIN)/python -m skyrender.training.localize_fit --fov-unknown-rows experiments/ch1/fov-unknown-fast/bench-real-train-fast.json \
-		experiments/ch1/invented-terrain/bench-real-dev-unknown-merged.json
+	$(BIN)/python -m skyrender.training.localize_fit --fov-unknown-rows experiments/ch1/dem-window/unknown/bench-real-train-unknown-train.json \
+		experiments/ch1/dem-window/unknown/bench-real-dev-unknown-dev.json
 
 # retrain the sky network and refit the boundary search on the training split (CPU, ~10 min);
 # reproduces skyrender/features/weights/ for the seed

@@ -27,8 +27,8 @@ the default: the 3 km it chose did not hold on the validation side). Fit, D and 
 ``skyrender/localizer/photo_confidence.json``, which the photo preset reads; the localization rows
 (refined poses, truth) to ``experiments/ch1/confidence-train-rows.json``, from which ``--from-rows``
 refits without localizing. With ``--fov-unknown-rows`` (``real_localize --side train --fov unknown --no-abstain``
-runs' JSON; ``make fit-photo-confidence`` passes ``experiments/ch1/fov-unknown-fast/``'s 20 train photos and
-``fov-unknown-range/``'s 21 dev photos, both localized by the shipped fov-unknown search) the fov-unknown mode gets a
+runs' JSON; ``make fit-photo-confidence`` passes ``experiments/ch1/dem-window/unknown/``'s 20 train photos and 21
+dev photos, both localized by the shipped fov-unknown search) the fov-unknown mode gets a
 threshold of its own by the same rule
 (:func:`fov_unknown_threshold`). The validation side is never used here.
 """

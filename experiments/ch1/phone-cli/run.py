@@ -1,6 +1,6 @@
 """CH1 photos as a phone hands them over, localized by the command a user types (2026-12-05, session 15).
 
-``python experiments/ch1/phone-cli/run.py OUT.json KEY ...``
+``python experiments/ch1/phone-cli/run.py OUT.json [--folder] KEY ...``
 
 Each photo is scaled up 4x (:func:`~skyrender.benchmarks.real_localize.photo_scaled_up`: 4096 px wide, 11-12.6 MP),
 stored as a JPEG turned on its side with EXIF Orientation 6 (upright once the orientation is applied) and
@@ -8,7 +8,8 @@ stored as a JPEG turned on its side with EXIF Orientation 6 (upright once the or
 
     skyrender localize PHOTO.jpg --dem TILE,TILE,... --dem-bounds W,S,E,N --height 2 --json --stats
 
-with the SRTM3 tiles around the place and its search window (``real_localize.place_window``), no ``--fov``: twice, the
+with the SRTM3 tiles around the place (``--folder``: ``--dem`` the whole ``../shared/data/dem``, tiles of other kinds
+and places included, as a user would pass it) and its search window (``real_localize.place_window``), no ``--fov``: twice, the
 first with an empty model cache (the model built as a new user waits), the second with it. Per run: the wall seconds
 and peak RSS of the command's own process (``scale.run_measured``), the command's ``seconds``, the status, confidence,
 fov, and the error to the true position.
@@ -27,7 +28,7 @@ import numpy as np
 from skyrender.benchmarks.real_localize import photo_scaled_up, place_window, places_of
 from skyrender.benchmarks.scale import run_measured, skyrender_command, stats_line
 from skyrender.datasets.real_photos import items_on_side
-from skyrender.diagnostics.oracle import tiles_around
+from skyrender.diagnostics.oracle import DEM_DIR, tiles_around
 from skyrender.evaluate import git_commit
 from skyrender.features.photo_io import DIAGONAL_35MM
 
@@ -51,7 +52,8 @@ def phone_jpeg(path: str, upright: np.ndarray, fov_deg: float) -> int:
 def main() -> None:
     from pyproj import Geod
 
-    out_path, keys = sys.argv[1], sys.argv[2:]
+    out_path, keys = sys.argv[1], [k for k in sys.argv[2:] if k != "--folder"]
+    folder = "--folder" in sys.argv[2:]
     items = {it.key: it for side in ("train", "dev", "validation") for it in items_on_side(side) if it.key.startswith("ch1/")}
     place_of, centres = places_of(items.values())
     geod = Geod(ellps="WGS84")
@@ -65,7 +67,8 @@ def main() -> None:
             lat0, lon0 = centres[place_of[key]]
             west, south, east, north = place_window(lat0, lon0)
             cache = os.path.join(tmp, "cache-" + place_of[key].replace("/", "_"))
-            args = skyrender_command("localize", photo, "--dem", ",".join(tiles_around(lat0, lon0)), "--dem-bounds",
+            dem = DEM_DIR if folder else ",".join(tiles_around(lat0, lon0))
+            args = skyrender_command("localize", photo, "--dem", dem, "--dem-bounds",
                                      f"{west},{south},{east},{north}", "--height", "2", "--json", "--stats")
             for run in ("fresh model cache", "model cached"):
                 os.environ["SKYRENDER_CACHE"] = cache
