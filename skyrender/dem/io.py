@@ -119,15 +119,9 @@ class SkippedTilesWarning(UserWarning):
     reach the window); the command line prints it as a warning."""
 
 
-def _overlaps(src_bounds, window) -> bool:
-    """Whether a raster's bounds and a (west, south, east, north) window share an area (the same CRS)."""
-    return (src_bounds.left < window[2] and window[0] < src_bounds.right
-            and src_bounds.bottom < window[3] and window[1] < src_bounds.top)
-
-
 def _covered_area(src_bounds, window) -> float:
-    """The area of a (west, south, east, north) window a raster's bounds cover (the same CRS); 1 without a
-    window, so that kinds of tiles are then compared by their counts."""
+    """The area of a (west, south, east, north) window a raster's bounds cover (the same CRS; 0: the raster does not
+    reach into it); 1 without a window, so that kinds of tiles are then compared by their counts."""
     if window is None:
         return 1.0
     return (max(0.0, min(src_bounds.right, window[2]) - max(src_bounds.left, window[0]))
@@ -150,35 +144,33 @@ def _snap_window(window, transform: Affine) -> tuple[float, float, float, float]
             x0 + math.ceil((window[2] - x0) / rx - eps) * rx, y0 - math.floor((y0 - window[3]) / ry + eps) * ry)
 
 
-def _tiles_to_merge(sources: list, paths: list[str], bounds, from_folder: bool, name: str) -> list:
-    """The open rasters a mosaic is merged from. With a window, only the tiles reaching into it (a folder of
-    tiles may hold far-away ones). Tiles of different CRSs or cell sizes cannot be merged: from a folder, the
+def _tiles_to_merge(sources: list, paths: list[str], bounds, from_folder: bool, name: str) -> list[int]:
+    """The indices of the open rasters a mosaic is merged from. With a window, only the tiles reaching into it (a
+    folder of tiles may hold far-away ones). Tiles of different CRSs or cell sizes cannot be merged: from a folder, the
     kind covering most of the window is kept (without a window: the kind of most tiles; ties: the first file's; a
-    grid without a CRS only where no other reaches the window),
-    the others named in a :class:`SkippedTilesWarning`; from tiles the user listed one by one, InputError."""
+    grid without a CRS only where no other reaches the window), the others named in a :class:`SkippedTilesWarning`;
+    from tiles the user listed one by one, InputError."""
     import warnings
 
-    keep = list(range(len(sources)))
-    if bounds is not None:
-        keep = [i for i in keep if _overlaps(sources[i].bounds, bounds)]
-        if not keep:
-            raise InputError(f"{name}: the window lies outside the tiles (no tile reaches into "
-                             f"{', '.join(f'{b:g}' for b in bounds)})")
+    reach = [_covered_area(src.bounds, bounds) for src in sources]
+    keep = [i for i in range(len(sources)) if reach[i] > 0]
+    if not keep:
+        raise InputError(f"{name}: the window lies outside the tiles (no tile reaches into "
+                         f"{', '.join(f'{b:g}' for b in bounds)})")
     kinds = [_grid_kind(sources[i]) for i in keep]
     if len(set(kinds)) > 1:
         if not from_folder:
             if len({k[0] for k in kinds}) > 1:
                 raise InputError(f"{name}: the tiles are in different CRSs ({', '.join(sorted({k[0] for k in kinds}))})")
             raise InputError(f"{name}: the tiles have different cell sizes")
-        reach = [_covered_area(sources[i].bounds, bounds) for i in keep]
         # a grid without a CRS counts last: its coordinates are not in the window's units, whatever they overlap
-        common = max(kinds, key=lambda kind: (kind[0] != "None", sum(r for r, k in zip(reach, kinds) if k == kind),
+        common = max(kinds, key=lambda kind: (kind[0] != "None", sum(reach[i] for i, k in zip(keep, kinds) if k == kind),
                                               kinds.count(kind)))
         left_out = [os.path.basename(paths[i]) for i, k in zip(keep, kinds) if k != common]
         keep = [i for i, k in zip(keep, kinds) if k == common]
         warnings.warn(f"left out of the mosaic, their CRS or cell size not that of the other {len(keep)} tiles: "
                       f"{', '.join(left_out)}", SkippedTilesWarning, stacklevel=2)
-    return [sources[i] for i in keep]
+    return keep
 
 
 def _load_mosaic(paths: list[str], *, crs, resolution: float | None, bounds=None, from_folder: bool = False) -> DEM:
@@ -199,8 +191,9 @@ def _load_mosaic(paths: list[str], *, crs, resolution: float | None, bounds=None
         first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise InputError(f"{name}: a tile cannot be read ({first})") from None
     try:
-        tiles = _tiles_to_merge(sources, paths, bounds, from_folder, name)
-        name = mosaic_name([paths[sources.index(src)] for src in tiles])
+        keep = _tiles_to_merge(sources, paths, bounds, from_folder, name)
+        tiles = [sources[i] for i in keep]
+        name = mosaic_name([paths[i] for i in keep])
         file_crs = tiles[0].crs
         nodata = tiles[0].nodata
         if bounds is not None:

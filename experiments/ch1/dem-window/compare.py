@@ -16,7 +16,8 @@ import json
 import numpy as np
 
 from skyrender.benchmarks.real_localize import log_best_of, margin_of, refined_of
-from skyrender.localizer.pipeline import PHOTO_CONFIDENCE_FILE, margin_logistic
+from skyrender.localizer.pipeline import PHOTO_CONFIDENCE_FILE
+from skyrender.training.localize_fit import confidences
 
 
 def load_rows(path, mode="known"):
@@ -51,7 +52,7 @@ def best_error(row):
 
 def scored(row, fit, mode="known"):
     margin = margin_of(row, fit["runner_up_m"])
-    confidence = float(margin_logistic(margin, fit["logit"], log_best_of(row), 0.0)) if np.isfinite(margin) else 0.0
+    confidence = float(confidences(np.array([margin]), np.array([log_best_of(row)]), fit["logit"])[0])
     threshold = fit.get("min_confidence_fov_unknown", fit["min_confidence"]) if mode == "unknown" else fit["min_confidence"]
     return best_error(row), margin, confidence, confidence >= threshold
 

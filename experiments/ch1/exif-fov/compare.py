@@ -3,6 +3,9 @@ outright, on the 73 CH1 training-side photos, both scored with the shipped photo
 
 ``python experiments/ch1/exif-fov/compare.py experiments/ch1/exif-fov/bench-real-train-exif-now.json
 experiments/ch1/exif-fov/bench-real-dev-exif-now.json > experiments/ch1/exif-fov/compare.txt``
+
+It reads the shipped rows and fit: those of efc3d2d (session 15). Since 4b5e86b (the DEM grids fixed,
+``../dem-window/``) the repository ships others, so run it from a checkout of efc3d2d to get ``compare.txt`` again.
 """
 
 from __future__ import annotations
