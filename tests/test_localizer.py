@@ -1263,6 +1263,36 @@ def test_horizon_costs_in_blocks_of_centres_are_the_whole_arrays_to_the_bit(monk
         assert np.array_equal(out[rows][0], out[10 ** 6][0]) and np.array_equal(out[rows][1], out[10 ** 6][1])
 
 
+@pytest.mark.parametrize("terms, roll", [(2, math.inf), (3, math.inf), (2, 8.0)])
+def test_the_best_horizon_fits_kept_block_by_block_are_those_of_the_whole_costs_to_the_bit(monkeypatch, terms, roll):
+    """:func:`best_horizon_fits` keeps each block of centres' best fits instead of storing every
+    cost: for any block size and k (ties in the costs included) it gives the flat indices, in
+    order, the costs and the offsets that :func:`smallest` and ``offset_at`` give on the whole
+    arrays of :func:`horizon_costs`."""
+    import scipy.fft
+
+    from skyrender.localizer import horizon_search
+
+    rng = np.random.default_rng(6)
+    n_bins, bin_deg = 360, 1.0
+    P = np.cumsum(rng.normal(0, 0.3, (301, n_bins)), axis=1).astype(np.float32)
+    P[40] = P[41]  # two centres with one horizon: tied costs
+    spectra = scipy.fft.rfft(P, axis=1), scipy.fft.rfft(P * P, axis=1)
+    bins = np.arange(-25, 26)
+    elevation, weights = rng.normal(1.0, 0.5, len(bins)), rng.uniform(0.1, 1.0, len(bins))
+    cost, offset_at = horizon_search.horizon_costs(spectra, n_bins, bins, elevation, weights, bin_deg, terms, roll)
+    for k in (1, 50, 700, P.size + 3):
+        expected = horizon_search.smallest(cost, k)
+        for rows in (10 ** 6, 64, 7):
+            monkeypatch.setattr(horizon_search, "COST_BLOCK_ROWS", rows)
+            flat, best, offset = horizon_search.best_horizon_fits(spectra, n_bins, bins, elevation, weights, bin_deg,
+                                                                  k, terms, roll)
+            np.testing.assert_array_equal(flat, expected)
+            assert np.array_equal(best, cost.ravel()[expected]) and np.array_equal(offset, offset_at(expected))
+    assert len(horizon_search.best_horizon_fits(spectra, n_bins, bins, elevation, weights, bin_deg, 0, terms,
+                                                roll)[0]) == 0
+
+
 def test_horizon_costs_with_a_bounded_roll_equal_a_direct_fit_with_the_slope_held():
     """The far-horizon cost of every (centre, azimuth) with the slope term held within a roll
     bound (the photo preset's) equals a direct weighted least-squares fit of the offset with the

@@ -88,78 +88,125 @@ def horizon_costs(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.
     spectra : rfft over azimuth of the horizons P (N, n_bins) and of P^2.
     bins, elevation, weights : the photo's skyline (:func:`skyline_directions`).
     Azimuth bin p means the optical axis points at p * bin_deg.
+    The search itself keeps only the best of these (:func:`best_horizon_fits`, the same values).
     """
-    spec_p, spec_p2 = spectra
-    alpha = np.radians(bins * bin_deg)
-    X = np.column_stack([np.ones_like(alpha), alpha, alpha ** 2])[:, :terms]
-    # Q = X T, orthonormal under the weights: the fit removes |Q^T W (P - e)|^2, and the raw
-    # coefficients are T times those of Q
-    T = orthonormal_basis(X, weights)
-    Q = X @ T
-    idx = bins % n_bins
-
-    def spread(values: np.ndarray) -> np.ndarray:
-        g = np.zeros(n_bins)
-        np.add.at(g, idx, values)
-        return np.conj(scipy.fft.rfft(g)).astype(np.complex64)
-
-    w = weights
-    # sum w (P - e)^2 = sum w P^2 - 2 sum w e P + sum w e^2
-    g_p2, g_p, sum_we2 = spread(w), spread(-2.0 * w * elevation), np.float32((w * elevation ** 2).sum())
-    # r = Q^T W (P - e) per (centre, azimuth); the fit removes |r|^2
-    g_r = [spread(w * Q[:, k]) for k in range(terms)]
-    sum_r = [np.float32((w * Q[:, k] * elevation).sum()) for k in range(terms)]
-    # the raw offset and slope are the rows T[0] and T[1] applied to r; holding the slope moves the
-    # cost by d^2 / |T[1]|^2 (|T[1]|^2 = (gram^-1)_11) and the offset by d T[0].T[1] / |T[1]|^2
-    T = T.astype(np.float32)
-    bounded = terms > 1 and math.isfinite(max_swing_deg)
-    max_slope = np.float32(np.tan(np.radians(max_swing_deg)) * 180.0 / np.pi) if bounded else None  # deg per rad
-    slope_var = np.float32(T[1] @ T[1]) if terms > 1 else None
-    norm = np.float32(max(float(w.sum()), 1e-9))
-
-    def slope_excess(slope: np.ndarray) -> np.ndarray:  # in place: how far each slope lies beyond the bound
-        slope -= np.clip(slope, -max_slope, max_slope)
-        return slope
-
-    N = spec_p.shape[0]
+    fit = _HorizonFit(spectra, n_bins, bins, elevation, weights, bin_deg, terms, max_swing_deg)
+    N = spectra[0].shape[0]
     cost = np.empty((N, n_bins), np.float32)
     r = [np.empty((N, n_bins), np.float32) for _ in range(terms)]
 
     def rows(lo: int, hi: int) -> None:
-        """Rows lo:hi of ``cost`` and ``r``: every operation is row-wise, so blocks give the
-        whole arrays' values to the bit, and a block's temporaries stay in the cache."""
-        def correlate(spec, conj_g):  # out[:, p] = sum_i P[:, i + p] g[i]
-            return scipy.fft.irfft(spec[lo:hi] * conj_g, n=n_bins, axis=1, workers=1)
-
-        c = scipy.fft.irfft(spec_p2[lo:hi] * g_p2 + spec_p[lo:hi] * g_p, n=n_bins, axis=1, workers=1)
-        c += sum_we2
-        rk = []
-        for k in range(terms):
-            rk.append(correlate(spec_p, g_r[k]))
-            rk[k] -= sum_r[k]
-        term = np.empty_like(c)
-        for k in range(terms):
-            np.multiply(rk[k], rk[k], out=term)
-            c -= term
-        if bounded:
-            excess = slope_excess(sum(T[1, k] * rk[k] for k in range(terms)))
-            np.multiply(excess, excess, out=excess)
-            excess *= np.float32(1.0 / slope_var)
-            c += excess
-        c /= norm
-        cost[lo:hi] = c
+        cost[lo:hi], rk = fit.rows(lo, hi)
         for k in range(terms):
             r[k][lo:hi] = rk[k]
 
     in_blocks(N, COST_BLOCK_ROWS, rows)
+    return cost, lambda flat: fit.offset([r[k].ravel()[flat] for k in range(terms)])
 
-    def offset_at(flat: np.ndarray) -> np.ndarray:  # the fitted offset (deg) at flat indices, computed there only
-        offset = sum(T[0, k] * r[k].ravel()[flat] for k in range(terms))
-        if bounded:
-            offset -= slope_excess(sum(T[1, k] * r[k].ravel()[flat] for k in range(terms))) * (T[0] @ T[1] / slope_var)
+
+def best_horizon_fits(spectra: tuple[np.ndarray, np.ndarray], n_bins: int, bins: np.ndarray, elevation: np.ndarray,
+                      weights: np.ndarray, bin_deg: float, k: int, terms: int = 3,
+                      max_swing_deg: float = math.inf) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ``k`` best (centre, azimuth) fits of :func:`horizon_costs` (same arguments): their flat
+    indices into its (N, n_bins) costs, ordered as :func:`smallest` orders them, their costs (deg^2)
+    and fitted offsets (deg), to the bit those of the whole arrays. Each block of centres keeps its
+    own ``k`` best (the whole's best ``k`` are among them), so the (N, n_bins) costs and fit
+    coefficients are never stored (3 x 80 MB a window for a CH1 model's 20 M pairs, written and paged
+    in anew each time) nor searched in one thread: the photo preset's search at one fov (5 tilts x
+    5 windows) 1.5x faster, the same poses (experiments/ch1/search-speed/)."""
+    fit = _HorizonFit(spectra, n_bins, bins, elevation, weights, bin_deg, terms, max_swing_deg)
+    N = spectra[0].shape[0]
+    blocks: dict[int, tuple] = {}
+
+    def rows(lo: int, hi: int) -> None:
+        cost, rk = fit.rows(lo, hi)
+        best = smallest(cost, k)
+        blocks[lo] = (best + lo * n_bins, cost.ravel()[best], fit.offset([rk[j].ravel()[best] for j in range(terms)]))
+
+    in_blocks(N, COST_BLOCK_ROWS, rows)
+    if not blocks:
+        return np.zeros(0, np.int64), np.zeros(0, np.float32), np.zeros(0, np.float32)
+    flat, cost, offset = (np.concatenate([blocks[lo][i] for lo in sorted(blocks)]) for i in range(3))
+    pick = np.lexsort((flat, cost))[:k]
+    return flat[pick], cost[pick], offset[pick]
+
+
+class _HorizonFit:
+    """The far-horizon fit of one skyline window (:func:`horizon_costs`), worked out block of centres by block."""
+
+    def __init__(self, spectra, n_bins, bins, elevation, weights, bin_deg, terms, max_swing_deg):
+        self.spec_p, self.spec_p2 = spectra
+        self.n_bins, self.terms = n_bins, terms
+        alpha = np.radians(bins * bin_deg)
+        X = np.column_stack([np.ones_like(alpha), alpha, alpha ** 2])[:, :terms]
+        # Q = X T, orthonormal under the weights: the fit removes |Q^T W (P - e)|^2, and the raw
+        # coefficients are T times those of Q
+        T = orthonormal_basis(X, weights)
+        Q = X @ T
+        idx = bins % n_bins
+
+        def spread(values: np.ndarray) -> np.ndarray:
+            g = np.zeros(n_bins)
+            np.add.at(g, idx, values)
+            return np.conj(scipy.fft.rfft(g)).astype(np.complex64)
+
+        w = weights
+        # sum w (P - e)^2 = sum w P^2 - 2 sum w e P + sum w e^2
+        self.g_p2, self.g_p = spread(w), spread(-2.0 * w * elevation)
+        self.sum_we2 = np.float32((w * elevation ** 2).sum())
+        # r = Q^T W (P - e) per (centre, azimuth); the fit removes |r|^2
+        self.g_r = [spread(w * Q[:, k]) for k in range(terms)]
+        self.sum_r = [np.float32((w * Q[:, k] * elevation).sum()) for k in range(terms)]
+        # the raw offset and slope are the rows T[0] and T[1] applied to r; holding the slope moves the
+        # cost by d^2 / |T[1]|^2 (|T[1]|^2 = (gram^-1)_11) and the offset by d T[0].T[1] / |T[1]|^2
+        self.T = T.astype(np.float32)
+        self.bounded = terms > 1 and math.isfinite(max_swing_deg)
+        # deg per rad
+        self.max_slope = np.float32(np.tan(np.radians(max_swing_deg)) * 180.0 / np.pi) if self.bounded else None
+        self.slope_var = np.float32(self.T[1] @ self.T[1]) if terms > 1 else None
+        self.norm = np.float32(max(float(w.sum()), 1e-9))
+
+    def slope_excess(self, slope: np.ndarray) -> np.ndarray:
+        """In place: how far each slope lies beyond the bound."""
+        slope -= np.clip(slope, -self.max_slope, self.max_slope)
+        return slope
+
+    def rows(self, lo: int, hi: int) -> tuple[np.ndarray, list[np.ndarray]]:
+        """Costs (hi - lo, n_bins) of centres lo:hi, and their fit coefficients r (``terms`` arrays
+        of that shape). Every operation is row-wise, so blocks give the whole arrays' values to the
+        bit, and a block's temporaries stay in the cache."""
+        terms, T, n_bins = self.terms, self.T, self.n_bins
+
+        def correlate(spec, conj_g):  # out[:, p] = sum_i P[:, i + p] g[i]
+            return scipy.fft.irfft(spec[lo:hi] * conj_g, n=n_bins, axis=1, workers=1)
+
+        c = scipy.fft.irfft(self.spec_p2[lo:hi] * self.g_p2 + self.spec_p[lo:hi] * self.g_p, n=n_bins, axis=1,
+                            workers=1)
+        c += self.sum_we2
+        rk = []
+        for k in range(terms):
+            rk.append(correlate(self.spec_p, self.g_r[k]))
+            rk[k] -= self.sum_r[k]
+        term = np.empty_like(c)
+        for k in range(terms):
+            np.multiply(rk[k], rk[k], out=term)
+            c -= term
+        if self.bounded:
+            excess = self.slope_excess(sum(T[1, k] * rk[k] for k in range(terms)))
+            np.multiply(excess, excess, out=excess)
+            excess *= np.float32(1.0 / self.slope_var)
+            c += excess
+        c /= self.norm
+        return c, rk
+
+    def offset(self, r: list[np.ndarray]) -> np.ndarray:
+        """The fitted offset (deg) from fit coefficients r (``terms`` arrays, at some pairs)."""
+        T = self.T
+        offset = sum(T[0, k] * r[k] for k in range(self.terms))
+        if self.bounded:
+            offset -= self.slope_excess(sum(T[1, k] * r[k] for k in range(self.terms))) * (T[0] @ T[1] /
+                                                                                            self.slope_var)
         return offset
-
-    return cost, offset_at
 
 
 def orthonormal_basis(X: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -238,13 +285,11 @@ def horizon_poses(horizons: Horizons, skyline: np.ndarray, weights: np.ndarray, 
             w_win = w * ((frac >= lo) & (frac <= hi))
             if np.count_nonzero(w_win) < params.min_bins:
                 continue
-            cost, offset_at = horizon_costs(spectra, n_bins, bins, elevation, w_win, horizons.bin_deg, params.terms,
-                                            params.max_swing_deg)
-            best = smallest(cost, params.per_window)
-            cost = cost.ravel()
+            best, cost, offset = best_horizon_fits(spectra, n_bins, bins, elevation, w_win, horizons.bin_deg,
+                                                   params.per_window, params.terms, params.max_swing_deg)
             flats.append(best)
-            costs.append(cost[best])
-            tilts.append(tilt + offset_at(best).astype(np.float64))
+            costs.append(cost)
+            tilts.append(tilt + offset.astype(np.float64))
     if not flats:
         return np.zeros((0, 6)), np.zeros(0)
     flat, cost, tilt = np.concatenate(flats), np.concatenate(costs).astype(np.float64), np.concatenate(tilts)
