@@ -4,11 +4,12 @@ the whole (N, n_bins) costs stored and then searched (``horizon_costs`` + ``smal
 
 ``python experiments/ch1/search-speed/ab.py [--photos N] > experiments/ch1/search-speed/ab.txt``
 
-Per training-side CH1 photo (the first N, spread over places): its place's model (the photo preset's, cached), the
-skyline the localizer extracts, and ``horizon_poses`` with the photo preset's search (5 tilts x 5 windows) at the
-three coarse fovs the fov-unknown mode searches (35, 50, 65 deg) and at the photo's own fov, twice each way,
-alternating; the faster of the two repeats per way counts. Training side only: this measures speed, and the poses
-either way must be the same to the bit.
+Per training-side CH1 photo (the first N; the training side's CH1 photos are all of place11): its place's model
+(the photo preset's, cached), the skyline the localizer extracts, and ``horizon_poses`` with the photo preset's
+search (5 tilts x 5 windows) at the three coarse fovs the fov-unknown mode searches (35, 50, 65 deg) and at the
+photo's own fov, twice each way, alternating; the faster of the two repeats per way counts. Training side only: this
+measures speed, and the poses either way must be the same to the bit. (``ab.txt`` was made at 525fc5c, whose copy
+picked the same first 6 photos by a longer rule.)
 """
 
 from __future__ import annotations
@@ -50,12 +51,7 @@ def main() -> None:
     params = LocalizeParams.for_photos()
     items = [it for it in items_on_side("train") if it.key.startswith("ch1/")]
     place_of, centres = places_of(items)
-    chosen, seen = [], set()
-    for it in items:  # one photo per place first, then more
-        if place_of[it.key] not in seen:
-            seen.add(place_of[it.key])
-            chosen.append(it)
-    chosen = (chosen + [it for it in items if it not in chosen])[: args.photos]
+    chosen = items[: args.photos]
     print(f"commit {git_commit()}; {len(chosen)} training-side CH1 photos; horizon_poses, photo preset, seconds "
           f"(best of 2 per way)")
     print(f"{'photo':28s} {'fov':>5s} {'poses':>6s} {'whole arrays':>12s} {'blocks':>7s} {'ratio':>6s} same")
