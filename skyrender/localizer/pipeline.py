@@ -201,6 +201,9 @@ class LocalizeParams:
     # (experiments/ch1/refine-fov-known/)
     refine_fov: bool = False
     given_focal_range: float = math.inf
+    # with the fov unknown, each candidate's refinement fits its focal length within this fraction of the fov it was
+    # found at (the search's fovs lie 2.5 deg apart at the end: a right one is within ~3 %); inf: unbounded
+    unknown_focal_range: float = math.inf
     score: ScoreParams = field(default_factory=ScoreParams)
     refine: RefineParams = field(default_factory=RefineParams)  # the refinement's search set-up
     # before abstaining, the first chunks' weakly held three-point poses are moved along their weak axis
@@ -1083,7 +1086,8 @@ def _refine(cand: _Candidate, search: _Search) -> None:
     cand.refined = refine_pose(search.terrain, cand.pose, search.intrinsics(search.fovs[0]), search.height, search.sky,
                                search.weights, fit_focal=search.fit_focal, f_px=cand.f_px, points=cand.points,
                                params=params.score, give_up_px=params.give_up_sweep_px, refine=params.refine,
-                               focal_range=params.given_focal_range if search.fov is not None else math.inf)
+                               focal_range=params.given_focal_range if search.fov is not None
+                               else params.unknown_focal_range)
     search.stats.refined += 1
     r = cand.refined
     cand.ground_slope = float(search.model.dem.slope_deg(r.pose[0], r.pose[1]))
