@@ -264,53 +264,6 @@ def test_a_folder_of_mixed_tiles_mosaics_those_of_one_kind_reaching_the_window(t
     assert len(err) == 1 and err[0].startswith("skyrender: warning:") and "fine.tif" in err[0]
 
 
-def test_a_folder_s_files_that_cannot_be_read_are_left_out_of_its_mosaic_with_a_warning(tmp_path, capsys):
-    """A folder of two tiles, a tile cut short (it opens, its posts cannot be read) and a file that is no raster:
-    its mosaic is the two tiles', the other two named in warnings; the cut tile listed by name is refused naming it,
-    and so is a folder with nothing readable, each in one line."""
-    import warnings
-
-    from skyrender import cli
-    from skyrender.dem import load_dem
-    from skyrender.dem.io import SkippedTilesWarning
-    from skyrender.errors import InputError
-
-    step, half = 1.0 / 120, 1.0 / 240
-    rng = np.random.default_rng(2)
-    z = 1000 + np.cumsum(np.cumsum(rng.normal(0, 2, (121, 241)), 0), 1)
-    _write_geotiff(tmp_path / "west.tif", z[:, :121], 7.0 - half, 47.0 + half, step)
-    _write_geotiff(tmp_path / "east.tif", z[:, 120:], 8.0 - half, 47.0 + half, step)
-    (tmp_path / "cut.tif").write_bytes((tmp_path / "east.tif").read_bytes()[:500])  # a download cut short
-    (tmp_path / "notes.asc").write_text("not an elevation grid\n")
-    window = (7.2, 46.2, 8.6, 46.8)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        folder = load_dem(tmp_path, bounds=window)
-    skipped = " ".join(str(w.message) for w in caught if issubclass(w.category, SkippedTilesWarning))
-    assert "cut.tif" in skipped and "notes.asc" in skipped and "west.tif" not in skipped
-    pair = load_dem([tmp_path / "west.tif", tmp_path / "east.tif"], bounds=window)
-    np.testing.assert_array_equal(folder.elevation, pair.elevation)
-    assert "mosaic of 2 tiles" in folder.name
-    with pytest.raises(InputError, match="cut.tif cannot be read"):
-        load_dem([tmp_path / "west.tif", tmp_path / "cut.tif"], bounds=window)
-    with pytest.raises(InputError, match="a tile cannot be read"):
-        load_dem([tmp_path / "west.tif", tmp_path / "notes.asc"], bounds=window)
-    nothing = tmp_path / "nothing"
-    nothing.mkdir()
-    (nothing / "a.tif").write_bytes(b"not a raster")
-    (nothing / "b.hgt").write_bytes(b"\0" * 100)
-    with pytest.raises(InputError, match="no file can be read as a raster"):
-        load_dem(nothing, bounds=window)
-    out = tmp_path / "t.ply"
-    assert cli.main(["mesh", str(tmp_path), "--dem-bounds", ",".join(map(str, window)), "--out", str(out)]) == 0
-    err = capsys.readouterr().err.splitlines()
-    assert err and all(line.startswith("skyrender: warning:") for line in err)
-    assert "cut.tif" in " ".join(err) and "notes.asc" in " ".join(err)
-    assert cli.main(["mesh", str(nothing), "--dem-bounds", ",".join(map(str, window)), "--out", str(out)]) == 2
-    err = capsys.readouterr().err.splitlines()
-    assert len(err) == 1 and "no file can be read" in err[0]
-
-
 def test_the_oracle_fit_of_a_ch1_photo_at_its_true_position():
     from skyrender.diagnostics.oracle import oracle_for_photo
 

@@ -115,8 +115,8 @@ MAX_MOSAIC_CELLS = 150_000_000
 
 
 class SkippedTilesWarning(UserWarning):
-    """Files of a DEM directory left out of its mosaic (not readable as rasters, or another CRS or cell size than
-    most of the tiles that reach the window); the command line prints it as a warning."""
+    """Tiles of a DEM directory left out of its mosaic (another CRS or cell size than most of the tiles that
+    reach the window); the command line prints it as a warning."""
 
 
 def _covered_area(src_bounds, window) -> float:
@@ -176,10 +176,7 @@ def _tiles_to_merge(sources: list, paths: list[str], bounds, from_folder: bool, 
 def _load_mosaic(paths: list[str], *, crs, resolution: float | None, bounds=None, from_folder: bool = False) -> DEM:
     """Several raster tiles of one CRS merged into one grid (rasterio.merge), then loaded as
     one DEM. Adjacent SRTM tiles share their edge row/column: the shared posts coincide.
-    ``from_folder``: the tiles are a directory's, which may hold other kinds (:func:`_tiles_to_merge`) and files
-    that are not rasters (left out with a :class:`SkippedTilesWarning`, unless none is readable)."""
-    import warnings
-
+    ``from_folder``: the tiles are a directory's, which may hold other kinds (:func:`_tiles_to_merge`)."""
     import rasterio
     from rasterio.merge import merge
 
@@ -188,25 +185,15 @@ def _load_mosaic(paths: list[str], *, crs, resolution: float | None, bounds=None
                  else os.path.basename(names[0])) + (f" in {tuple(round(b, 4) for b in bounds)}" if bounds else ""))
 
     name = mosaic_name(paths)
-    sources, opened, unreadable = [], [], []
     try:
-        for p in paths:
-            try:
-                sources.append(rasterio.open(p))
-                opened.append(p)
-            except Exception as exc:
-                first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-                if not from_folder:  # tiles listed one by one are all wanted
-                    raise InputError(f"{name}: a tile cannot be read ({first})") from None
-                unreadable.append(os.path.basename(p))
-        if not sources:
-            raise InputError(f"{name}: no file can be read as a raster ({first})")
-        if unreadable:  # a folder may hold other files: the rest is still a mosaic
-            warnings.warn(f"left out of the mosaic, not readable as rasters: {', '.join(unreadable)}",
-                          SkippedTilesWarning, stacklevel=2)
-        keep = _tiles_to_merge(sources, opened, bounds, from_folder, name)
+        sources = [rasterio.open(p) for p in paths]
+    except Exception as exc:
+        first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise InputError(f"{name}: a tile cannot be read ({first})") from None
+    try:
+        keep = _tiles_to_merge(sources, paths, bounds, from_folder, name)
         tiles = [sources[i] for i in keep]
-        name = mosaic_name([opened[i] for i in keep])
+        name = mosaic_name([paths[i] for i in keep])
         file_crs = tiles[0].crs
         nodata = tiles[0].nodata
         if bounds is not None:
@@ -220,24 +207,11 @@ def _load_mosaic(paths: list[str], *, crs, resolution: float | None, bounds=None
         if cells > MAX_MOSAIC_CELLS:
             raise InputError(f"{name}: the mosaic would have {cells:,} cells (at most {MAX_MOSAIC_CELLS:,}); give a "
                              "window (--dem-bounds) or fewer tiles")
-        fill = nodata if nodata is not None else -32768
         try:
-            data, transform = merge(tiles, bounds=bounds, nodata=fill, masked=True)
+            data, transform = merge(tiles, bounds=bounds, nodata=nodata if nodata is not None else -32768,
+                                    masked=True)
         except Exception as exc:
-            reason = str(exc).splitlines()[0]
-            # which tiles fail (a file cut short opens but cannot be read): named, or from a folder left out
-            broken = [i for i in keep if not _window_reads(sources[i], bounds)]
-            broken_names = ", ".join(os.path.basename(opened[i]) for i in broken)
-            if not from_folder or not broken or len(broken) == len(keep):
-                failing = f"{broken_names} cannot be read" if broken else "the tiles cannot be merged"
-                raise InputError(f"{name}: {failing} ({reason})") from None
-            warnings.warn(f"left out of the mosaic, not readable: {broken_names}", SkippedTilesWarning, stacklevel=2)
-            keep = [i for i in keep if i not in broken]
-            name = mosaic_name([opened[i] for i in keep])
-            try:
-                data, transform = merge([sources[i] for i in keep], bounds=bounds, nodata=fill, masked=True)
-            except Exception as exc:
-                raise InputError(f"{name}: the tiles cannot be merged ({str(exc).splitlines()[0]})") from None
+            raise InputError(f"{name}: the tiles cannot be merged ({str(exc).splitlines()[0]})") from None
     finally:
         for src in sources:
             src.close()
@@ -246,21 +220,6 @@ def _load_mosaic(paths: list[str], *, crs, resolution: float | None, bounds=None
     void = np.ma.getmaskarray(band)
     crs_str = _crs_string(file_crs) if file_crs else _crs_string(crs)
     return _georeference(z, void, transform, crs_str, name, resolution)
-
-
-def _window_reads(src, bounds) -> bool:
-    """Whether an open raster's first band can be read where it covers ``bounds`` (everywhere without them)."""
-    from rasterio.windows import Window, from_bounds
-
-    try:
-        window = None
-        if bounds is not None:
-            window = from_bounds(*bounds, transform=src.transform).round_offsets().round_lengths()
-            window = window.intersection(Window(0, 0, src.width, src.height))
-        src.read(1, window=window)
-        return True
-    except Exception:
-        return False
 
 
 def _load_raster(path: str, *, crs, resolution: float | None) -> DEM:
