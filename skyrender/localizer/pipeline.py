@@ -172,6 +172,11 @@ class LocalizeParams:
     telephoto_fovs: tuple = ()
     telephoto_fov_step: tuple = ()
     telephoto_refinements: int = 4
+    # unknown fov: the far-horizon candidates of each coarse fov (fov_candidates) other than the two best-fitting
+    # join too (lens 2), and this many of them by each ranking are refined beside the others (0: none). The focal
+    # length is free, so the answer's margin should be taken against places found at other focal lengths as well,
+    # not only against places at its own (experiments/ch1/other-fov-runner-up/)
+    other_fov_refinements: int = 0
     # ... which search only the horizon centres of the poses kept at the fovs tried before (False: every centre)
     fov_probes_on_found: bool = True
     # the answer and its runner-up are taken among refined poses whose ground slopes at most this (deg;
@@ -384,7 +389,9 @@ class _Candidate:
     points: np.ndarray | None  # (3, 3) the hypothesis' matched feature points (None: from the horizons)
     refined: Refined | None = None
     ground_slope: float = math.nan  # deg, under the refined pose (DEM.slope_deg)
-    lens: int = 0  # the fov range a far-horizon candidate was found in (1: LocalizeParams.telephoto_fovs)
+    # the fov range a far-horizon candidate was found in (1: LocalizeParams.telephoto_fovs; 2: a coarse fov other than
+    # the two best-fitting, LocalizeParams.other_fov_refinements)
+    lens: int = 0
 
 
 def standable_mask(slopes, max_slope_deg: float) -> np.ndarray:
@@ -801,13 +808,18 @@ def _far_horizon_candidates(search: _Search) -> None:
                 return verify_at(verified, fov_i, found[found >= 0])
             _narrow_fov(verified, probe, steps, ratio)
         # a wrong focal length scales the skyline's azimuths: the best fits pick the fov
-        for fov_i in sorted(verified, key=lambda f: _best_of(verified[f][2]))[: 1 if search.fov is not None else 2]:
+        best_fovs = sorted(verified, key=lambda f: _best_of(verified[f][2]))[: 1 if search.fov is not None else 2]
+        for fov_i in best_fovs:
             f_px, poses, score, trusted = verified[fov_i]
             if params.horizon_rerank and (search.fov is not None or params.rerank_fov_unknown):
                 with stats.timed("rerank"):
                     poses, score, trusted = _rerank(search, poses, score, trusted, fov_i)
             _add_candidates(search.candidates, poses, score, trusted, f_px, None, params, lens)
             search.horizon_pool.append((f_px, fov_i, poses))
+        if search.fov is None and lens == 0 and params.other_fov_refinements:
+            for fov_i in [f for f in fovs if f not in best_fovs]:
+                f_px, poses, score, trusted = verified[fov_i]
+                _add_candidates(search.candidates, poses, score, trusted, f_px, None, params, lens=2)
 
 
 def _rerank(search: _Search, poses: np.ndarray, score: np.ndarray, second: np.ndarray,
@@ -1055,11 +1067,12 @@ def _next_to_refine(candidates: list[_Candidate], n: int, params: LocalizeParams
                     budgeted: bool = True, horizons: bool = True, peaks: bool = True) -> list[_Candidate]:
     """:func:`_best_by_either` among the candidates not refined yet, up to ``n`` of the
     three-point (with ``peaks``) and ``n`` of the far-horizon ones (with ``horizons``; of those
-    from the telephoto range, ``telephoto_refinements`` apart), within each one's refinement
-    budget when ``budgeted``."""
+    from the telephoto range, ``telephoto_refinements`` apart, and of those from the other coarse fovs,
+    ``other_fov_refinements``), within each one's refinement budget when ``budgeted``."""
     picked = []
     sources = ((True, 0, n, params.max_refinements), (False, 0, n, params.max_horizon_refinements),
-               (False, 1, min(n, params.telephoto_refinements), params.telephoto_refinements))
+               (False, 1, min(n, params.telephoto_refinements), params.telephoto_refinements),
+               (False, 2, min(n, params.other_fov_refinements), params.other_fov_refinements))
     for from_peaks, lens, most, limit in [s for s in sources if (peaks if s[0] else horizons)]:
         mine = [c for c in candidates if (c.points is not None) == from_peaks and c.lens == lens]
         budget = max(0, min(most, limit - sum(c.refined is not None for c in mine))) if budgeted else most
