@@ -1091,6 +1091,44 @@ def test_a_telephoto_range_searched_apart_when_the_fov_is_unknown():
     assert sum(c.lens == 0 for c in picked) == 8 and sum(c.lens == 1 for c in picked) == params.telephoto_refinements
 
 
+def test_with_the_fov_unknown_the_other_coarse_fovs_candidates_are_refined_on_a_budget_of_their_own(scene, views,
+                                                                                                 monkeypatch):
+    """``other_fov_refinements`` (an option): with the fov unknown, the far-horizon candidates of the coarse fovs other
+    than the two best-fitting join as lens 2, and that many by each ranking are refined beside the others, so that the
+    answer's margin is taken against places found at other focal lengths too. With the fov given there are no other
+    fovs; off (0), nothing joins. The view is localized every way."""
+    from dataclasses import replace
+
+    import skyrender.localizer.pipeline as pipeline
+    from skyrender.localizer.pipeline import _Candidate, _next_to_refine
+
+    _, terrain, model = scene
+    pose = views.poses[4]
+    refined_lenses = []
+    refine = pipeline._refine
+
+    def recording(cand, search):
+        refined_lenses.append(cand.lens)
+        return refine(cand, search)
+
+    monkeypatch.setattr(pipeline, "_refine", recording)
+    params = replace(LocalizeParams(), max_hypotheses=0, fov_candidates=(45.0, 60.0, 75.0), horizon_fov_step=(),
+                     other_fov_refinements=1)
+    for fov, option, lens_2 in ((None, 1, True), (None, 0, False), (60.0, 1, False)):
+        refined_lenses.clear()
+        result = localize(_photo(terrain, pose), model, 2.0, fov, terrain=terrain,
+                          params=replace(params, other_fov_refinements=option))
+        _assert_close(result, pose)
+        assert (2 in refined_lenses) == lens_2, (fov, option, refined_lenses)
+        assert refined_lenses.count(2) <= 2 * option
+    same = np.zeros(6)
+    found = [_Candidate(same, 900.0, 2.0 + i, 2.0 + i, None) for i in range(20)]
+    other = [_Candidate(same, 600.0, 1.0 + i / 100, 3.0 - i / 100, None, lens=2) for i in range(20)]
+    picked = _next_to_refine(found + other, 8, replace(params, other_fov_refinements=2), budgeted=False, peaks=False)
+    # the two best by each ranking: other[0], other[1] by score, other[19], other[18] by the second ranking
+    assert sum(c.lens == 0 for c in picked) == 8 and [c for c in picked if c.lens == 2] == [other[i] for i in (0, 1, 18, 19)]
+
+
 def test_localizes_on_a_real_dem():
     """SRTM 30 m of Big Tujunga (San Gabriel Mountains): a rendered mountain view."""
     from skyrender.dem import load_dem
