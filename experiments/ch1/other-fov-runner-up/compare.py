@@ -1,5 +1,5 @@
-"""The fov-unknown rows with the other coarse fovs' candidates refined too against those without, on the
-41 training-side photos, by the rule of README.md.
+"""The fov-unknown rows with the other coarse fovs' candidates refined too, alone and with the re-ranking, against
+those without, on the 41 training-side photos, by the rules of README.md.
 
 ``python experiments/ch1/other-fov-runner-up/compare.py > experiments/ch1/other-fov-runner-up/compare.txt``
 """
@@ -18,11 +18,15 @@ from skyrender.training.localize_fit import confidences, fov_unknown_threshold, 
 HERE = os.path.dirname(os.path.abspath(__file__))
 RUNS = {"shipped (../dem-window/unknown/)": [os.path.join(HERE, "..", "dem-window", "unknown",
                                                             f"bench-real-{s}-unknown-{s}.json") for s in ("train", "dev")],
-        "other fovs refined (this folder)": [os.path.join(HERE, f"bench-real-{s}-other-fov.json") for s in ("train", "dev")]}
+        "other fovs refined (this folder)": [os.path.join(HERE, f"bench-real-{s}-other-fov.json") for s in ("train", "dev")],
+        "both: other fovs refined and re-ranked (this folder)": [os.path.join(HERE, f"bench-real-{s}-both.json")
+                                                                 for s in ("train", "dev")]}
 
 
 def main() -> None:
     for name, paths in RUNS.items():
+        if not all(os.path.exists(p) for p in paths):
+            continue
         rows = [r for p in paths for r in json.load(open(p))["photos"]]
         error = np.array([r.get("error_m", np.inf) for r in rows])
         confidence = confidences(np.array([margin_of(r, PHOTO_RUNNER_UP_M) for r in rows]),
