@@ -178,6 +178,42 @@ def fov_unknown_threshold(rows: list[dict], logit: tuple, runner_up_m: float, fl
     return max(floor, abstain_threshold(confidence, rows_right(rows)))
 
 
+def fov_unknown_report(name: str, rows: list[dict], logit: tuple, runner_up_m: float, floor: float,
+                       top: int = 14) -> str:
+    """A run of fov-unknown rows against the fit's rule (:func:`fov_unknown_threshold`): the best place within
+    100 m / 250 m / 1 km, the threshold and what it answers, the three most confident answers over 1 km off, the
+    median seconds, then the ``top`` most confident photos (confidence, error, fov)."""
+    error = np.array([r.get("error_m", np.inf) for r in rows])
+    confidence = confidences(np.array([margin_of(r, runner_up_m) for r in rows]),
+                             np.array([log_best_of(r) for r in rows]), logit)
+    threshold = fov_unknown_threshold(rows, logit, runner_up_m, floor)
+    answered, right = confidence >= threshold, rows_right(rows)
+    wrong_top = sorted(((float(c), r["photo"], round(float(e))) for c, r, e in zip(confidence, rows, error)
+                        if e > 1000.0), reverse=True)[:3]
+    lines = [f"{name}: {len(rows)} photos; best place within 100 m / 250 m / 1 km: "
+             f"{int((error <= 100).sum())} / {int((error <= 250).sum())} / {int(right.sum())}; median error within "
+             f"1 km {np.median(error[right]):.0f} m; threshold {threshold:.2f}: answered {int(answered.sum())}, right "
+             f"{int((answered & right).sum())}; most confident > 1 km: "
+             + ", ".join(f"{p} {e} m at {c:.3f}" for c, p, e in wrong_top)
+             + f"; median seconds {np.median([r['seconds'] for r in rows]):.1f}"]
+    for c, r, e in sorted(zip(confidence, rows, error), key=lambda t: -t[0])[:top]:
+        lines.append(f"    {r['photo']:34s} {c:.4f} {e:9.0f} m  fov {r.get('fov', float('nan')):.2f}")
+    return "\n".join(lines)
+
+
+def fov_unknown_runs_report(runs: dict[str, list[str]]) -> str:
+    """:func:`fov_unknown_report` of each run (a name and its ``bench-real`` JSON files, rows pooled) under the photo
+    preset's fit, those whose files are all there."""
+    from ..localizer.pipeline import PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE, PHOTO_RUNNER_UP_M
+
+    reports = []
+    for name, paths in runs.items():
+        if all(os.path.exists(p) for p in paths):
+            rows = [r for p in paths for r in json.load(open(p))["photos"]]
+            reports.append(fov_unknown_report(name, rows, PHOTO_MARGIN_LOGIT, PHOTO_RUNNER_UP_M, PHOTO_MIN_CONFIDENCE))
+    return "\n".join(reports)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--limit", type=int, default=0, help="at most N photos, spread over the places")
