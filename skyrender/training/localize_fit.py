@@ -209,7 +209,10 @@ def fov_unknown_runs_report(runs: dict[str, list[str]]) -> str:
     reports = []
     for name, paths in runs.items():
         if all(os.path.exists(p) for p in paths):
-            rows = [r for p in paths for r in json.load(open(p))["photos"]]
+            rows = []
+            for path in paths:
+                with open(path) as f:
+                    rows += json.load(f)["photos"]
             reports.append(fov_unknown_report(name, rows, PHOTO_MARGIN_LOGIT, PHOTO_RUNNER_UP_M, PHOTO_MIN_CONFIDENCE))
     return "\n".join(reports)
 
