@@ -321,8 +321,8 @@ def localize(
                    f"tilt={d['tilt']:.2f} swing={d['swing']:.2f} fov={d['fov']:.2f}; confidence "
                    f"{d['confidence']:.2f}; {d['hypotheses']} hypotheses in {d['seconds']:.1f} s")
     else:
-        # with the fov unknown the photo preset answers almost never (its threshold, from the training photos, is
-        # 1.00: experiments/ch1/README.md): say what would change that
+        # with the fov unknown the photo preset answers less often (a wrong focal length is one more freedom for a
+        # wrong place: experiments/ch1/other-fov-runner-up/): say what would change that
         hint = ("; the field of view was unknown: give --fov (or a photo with an EXIF focal length)"
                 if fov is None else "")
         typer.echo(f"abstained: no pose found that fits the skyline well enough ({result.hypotheses} hypotheses, "

@@ -994,8 +994,8 @@ def test_localizes_with_unknown_field_of_view(scene, views):
 
 def test_far_horizon_poses_are_moved_before_ranking_with_the_fov_given_and_not_unknown_where_so_set(scene, views):
     """``horizon_rerank`` moves far-horizon poses to the best of a grid around them before they are ranked; with
-    ``rerank_fov_unknown`` False (the photo preset) only when the fov is given: a search at two fovs would pay it
-    twice. The view is localized either way."""
+    ``rerank_fov_unknown`` False only when the fov is given (the photo preset re-ranks with the fov unknown too).
+    The view is localized either way."""
     from dataclasses import replace
 
     _, terrain, model = scene
