@@ -1,12 +1,14 @@
-"""Does a coarse screen before the fov-unknown re-ranking keep the poses the full re-ranking puts first?
+"""Which far-horizon poses does the fov-unknown re-ranking need to move? Could fewer be moved?
 
 ``python experiments/ch1/rerank-screen/screen_recall.py --photos N > experiments/ch1/rerank-screen/screen_recall.txt``
 
 Training side only (CH1 train and dev photos of the fov-unknown set, ``../dem-window/unknown/``), fov unknown, photo
-preset. Each photo is localized as shipped; every call of the re-ranking (one per best-fitting fov) is also run with
-each screen (``LocalizeParams.rerank_screen_fov_unknown``: grid, column stride, poses kept by each ranking) on the
-same poses. For each screen: the share of the full re-ranking's best 16 poses by its score that the screen passes on
-(those it passes are moved to exactly the same place), and its seconds against the full re-ranking's.
+preset. Each photo is localized as shipped; at every call of the re-ranking (one per best-fitting fov) its poses are
+also screened (``LocalizeParams.rerank_screen_fov_unknown``'s coarse grids: grid, column stride at 1,024 wide) and
+the arrays are kept (``calls.npz``). Printed per call: the rank, by the full re-ranking's score, of the best pose it
+moves to within 1 km of the true position (a right place; - where none), and that pose's rank by the search's score
+before moving, by its cost (the second ranking) and by each screen's score: a screen (or a plain cut of the poses by
+their first rankings, ``horizon_rerank``) keeping that many by either ranking would keep the right place.
 """
 
 from __future__ import annotations
@@ -14,7 +16,6 @@ from __future__ import annotations
 import argparse
 import json
 import time
-from dataclasses import replace
 
 import numpy as np
 
@@ -22,9 +23,9 @@ from skyrender.benchmarks import real_localize
 from skyrender.datasets.real_photos import items_on_side
 from skyrender.evaluate import git_commit
 from skyrender.localizer import LocalizeParams, pipeline
+from skyrender.localizer.refinement import local_rescore
 
-SCREENS = [(5, 64, 200), (5, 64, 100), (3, 64, 200), (3, 64, 100), (3, 128, 200)]
-TOP = 16
+SCREENS = [(3, 32), (3, 64), (5, 64)]
 
 
 def fov_unknown_photos() -> list[str]:
@@ -35,54 +36,68 @@ def fov_unknown_photos() -> list[str]:
     return names
 
 
+def rank_of(values: np.ndarray, i: int) -> int:
+    """1-based rank of ``values[i]`` (ascending, ties by index as the pipeline breaks them)."""
+    return int(np.flatnonzero(np.argsort(values, kind="stable") == i)[0]) + 1
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--photos", type=int, default=8)
+    parser.add_argument("--out", default="/tmp/rerank-screen-calls.npz")
     args = parser.parse_args()
     wanted = fov_unknown_photos()
     items = [it for side in ("train", "dev") for it in items_on_side(side) if it.key in wanted]
     chosen = items[:: max(1, len(items) // args.photos)][: args.photos]
     full = pipeline.rerank_far_horizon
-    records = []
+    calls, arrays = [], {}
 
     def recorded(terrain, poses, score, second, intrinsics, height, sky, weights, params, screen_keep=0):
         t = time.perf_counter()
         out = full(terrain, poses, score, second, intrinsics, height, sky, weights, params, 0)
-        full_s = time.perf_counter() - t
-        best = set(out[0][np.argsort(out[2], kind="stable")[:TOP]].tolist())
-        record = {"poses": len(poses), "full_s": full_s, "screens": []}
-        for grid, stride, keep in SCREENS:
-            p = replace(params, rerank_screen_grid=grid, rerank_screen_stride=stride)
+        record = {"full_s": time.perf_counter() - t, "screen_s": [], "screened": []}
+        for grid, stride in SCREENS:
             t = time.perf_counter()
-            pick, moved, _ = full(terrain, poses, score, second, intrinsics, height, sky, weights, p, keep)
-            s = time.perf_counter() - t
-            same = all(np.array_equal(moved[pick == i][0], out[1][out[0] == i][0]) for i in best if i in set(pick))
-            record["screens"].append({"kept_of_best": len(best & set(pick.tolist())) / len(best), "s": s, "same": same})
-        records.append(record)
+            _, s = local_rescore(terrain, poses, intrinsics, height, sky, weights, params.rerank_half_m, grid,
+                                 pipeline.rerank_columns(params, intrinsics.width, stride), params.score)
+            record["screen_s"].append(time.perf_counter() - t)
+            record["screened"].append(s)
+        record.update(poses=poses, moved=out[1], rescored=out[2], score=score, second=second, pick=out[0])
+        calls.append(record)
         return out
 
     pipeline.rerank_far_horizon = recorded
     params = LocalizeParams.for_photos()
     print(f"commit {git_commit()}; {len(chosen)} training-side CH1 photos, fov unknown, photo preset; per re-ranking "
-          f"call: the share of the full re-ranking's best {TOP} by score that each screen keeps, seconds")
-    print("screens (grid, column stride at 1,024 wide, kept by each ranking): " + ", ".join(map(str, SCREENS)))
+          f"call: the best right place's rank (1-based) by the full re-ranking, and by the first rankings and screens")
+    print(f"{'photo':26s} {'poses':>5s} {'full s':>6s} {'full':>5s} {'score':>5s} {'cost':>5s} "
+          + " ".join(f"{str(s):>9s}" for s in SCREENS) + "  screen s")
+    n_call = 0
     for it in chosen:
-        records.clear()
-        real_localize.run([it], ["unknown"], progress=False, params=params)
-        for r in records:
-            cells = "  ".join(f"{x['kept_of_best']:4.2f} {x['s']:4.1f}s{'' if x['same'] else '!'}" for x in r["screens"])
-            print(f"{it.key:28s} poses {r['poses']:5d} full {r['full_s']:4.1f}s | {cells}", flush=True)
-            all_records.append(r)
-    print("\nsummary: mean share kept, photos-calls with every one kept, total seconds against the full re-ranking")
-    full_total = sum(r["full_s"] for r in all_records)
-    for n, screen in enumerate(SCREENS):
-        kept = [r["screens"][n]["kept_of_best"] for r in all_records]
-        total = sum(r["screens"][n]["s"] for r in all_records)
-        print(f"  {str(screen):16s} mean {np.mean(kept):.3f}  all kept {sum(k == 1.0 for k in kept)}/{len(kept)}  "
-              f"{total:6.1f} s vs {full_total:6.1f} s ({total / full_total:.2f})")
+        calls.clear()
+        rows = real_localize.run([it], ["unknown"], progress=False, params=params)
+        truth = np.array(rows[0]["truth_xy"])
+        for c in calls:
+            assert np.array_equal(c["pick"], np.arange(len(c["poses"])))  # the preset moves every pose
+            right = np.flatnonzero(np.hypot(*(c["moved"][:, :2] - truth).T) < 1000.0)
+            if len(right):
+                i = right[np.argmin(c["rescored"][right])]
+                ranks = [rank_of(c["rescored"], i), rank_of(c["score"], i), rank_of(c["second"], i)]
+                ranks += [rank_of(s, i) for s in c["screened"]]
+                cells = " ".join(f"{r:>5d}" for r in ranks[:3]) + " " + " ".join(f"{r:>9d}" for r in ranks[3:])
+            else:
+                cells = " ".join(f"{'-':>5s}" for _ in range(3)) + " " + " ".join(f"{'-':>9s}" for _ in SCREENS)
+            print(f"{it.key[4:30]:26s} {len(c['poses']):5d} {c['full_s']:6.1f} {cells}  "
+                  + " ".join(f"{s:.1f}" for s in c["screen_s"]), flush=True)
+            for key in ("poses", "moved", "rescored", "score", "second"):
+                arrays[f"{n_call}_{key}"] = c[key]
+            for n, s in enumerate(c["screened"]):
+                arrays[f"{n_call}_screen{n}"] = s
+            arrays[f"{n_call}_truth"] = truth
+            arrays[f"{n_call}_photo"] = np.array(it.key)
+            n_call += 1
+        np.savez_compressed(args.out, **arrays)
 
-
-all_records: list[dict] = []
 
 if __name__ == "__main__":
     main()
