@@ -1009,60 +1009,6 @@ def test_far_horizon_poses_are_moved_before_ranking_with_the_fov_given_and_not_u
         _assert_close(result, pose)
 
 
-def test_the_fov_unknown_re_ranking_screen_passes_on_the_best_by_each_ranking_moved_as_the_full_one_moves_them(
-        scene, views, monkeypatch):
-    """``rerank_screen_fov_unknown``: the poses are first moved on a coarser grid and only the best ``keep`` by that
-    score and by the second ranking go on to the full grid, where each is moved exactly as the full re-ranking
-    moves it; the pose off the truth by 140 m among 30 wrong ones is passed on and moved closer. Only with the fov
-    unknown: the localizer asks for the screen then and not with the fov given, and localizes the view either way."""
-    from dataclasses import replace
-
-    from skyrender.localizer import pipeline
-    from skyrender.localizer.pipeline import column_weights, rerank_far_horizon
-    from skyrender.render import render_skylines
-
-    dem, terrain, model = scene
-    truth = views.poses[4].array()
-    rng = np.random.default_rng(3)
-    x0, x1, y0, y1 = dem.extent
-    wrong = np.column_stack([rng.uniform(x0 + 3000, x1 - 3000, 30), rng.uniform(y0 + 3000, y1 - 3000, 30),
-                             np.zeros(30), rng.uniform(0, 360, 30), np.zeros((30, 2))])
-    wrong[:, 2] = dem.ground(wrong[:, 0], wrong[:, 1]) + 2.0
-    near = truth.copy()
-    near[:2] += (100.0, 100.0)
-    poses = np.vstack([wrong[:15], near, wrong[15:]])
-    sky = render_skylines(terrain, truth[None], K)[0]
-    weights = column_weights(np.isfinite(sky))
-    params = replace(LocalizeParams.for_photos(), rerank_grid=7, rerank_half_m=300.0, rerank_stride=32,
-                     rerank_screen_grid=3, rerank_screen_stride=64)
-    score, second = np.arange(31.0)[::-1], rng.permutation(31).astype(float)
-    full = rerank_far_horizon(terrain, poses, score, second, K, 2.0, sky, weights, params)
-    pick, moved, rescored = rerank_far_horizon(terrain, poses, score, second, K, 2.0, sky, weights, params, 4)
-    assert len(full[0]) == 31 and 4 <= len(pick) <= 8
-    assert set(np.argsort(second, kind="stable")[:4]) <= set(pick)
-    assert 15 in pick and pick[np.argmin(rescored)] == 15
-    assert np.hypot(*(moved[pick == 15][0, :2] - truth[:2])) < np.hypot(100.0, 100.0)
-    for i in pick:
-        np.testing.assert_array_equal(moved[pick == i][0], full[1][full[0] == i][0])
-        assert rescored[pick == i][0] == full[2][full[0] == i][0]
-
-    asked = []
-
-    def recorded(*args, **kwargs):
-        asked.append(args[-1] if len(args) > 9 else 0)
-        return rerank_far_horizon(*args, **kwargs)
-
-    monkeypatch.setattr(pipeline, "rerank_far_horizon", recorded)
-    local = replace(LocalizeParams(), max_hypotheses=0, horizon_rerank=4, rerank_grid=3, rerank_half_m=150.0,
-                    rerank_stride=16, rerank_screen_fov_unknown=2, fov_candidates=(60.0,), horizon_fov_step=())
-    pose = views.poses[4]
-    _assert_close(localize(_photo(terrain, pose), model, 2.0, 60.0, terrain=terrain, params=local), pose)
-    assert asked and set(asked) == {0}
-    asked.clear()
-    _assert_close(localize(_photo(terrain, pose), model, 2.0, None, terrain=terrain, params=local), pose)
-    assert asked and set(asked) == {2}
-
-
 def test_the_re_ranking_renders_as_many_columns_on_a_photo_of_any_width():
     """The photo preset's re-ranking renders every 32nd column of a 1,024-wide CH1 photo; a 12 MP phone photo (4,032
     columns) as many columns, not four times as many; without a stride of its own, the verification's."""

@@ -198,13 +198,6 @@ class LocalizeParams:
     # so there the scaling only thins the renders of a narrower photo
     rerank_stride: int | None = None
     rerank_fov_unknown: bool = True  # ... with the fov unknown too (False: only with the fov given)
-    # with the fov unknown, the re-ranking first screens its poses on a coarser grid (rerank_screen_grid^2 over the
-    # same +-rerank_half_m, renders on every rerank_screen_stride-th column, scaled like rerank_stride) and moves only
-    # the best this many by each ranking (the screened score and the second) on the full grid; the rest are left out
-    # (0: no screen). Its two best fovs re-ranked in full cost ~18 s of a ~45 s photo (experiments/ch1/rerank-screen/)
-    rerank_screen_fov_unknown: int = 0
-    rerank_screen_grid: int = 5
-    rerank_screen_stride: int = 64
     # a given fov is only a start: every candidate's refinement fits the focal length too, within given_focal_range
     # (a fraction) of the given one. Not for an EXIF fov (the CLI's until 2026-12-05: unbounded, on the CH1 training
     # side it answered 2 photos 1.7 and 69 km off at 0.98 and 0.95; experiments/ch1/exif-fov/), nor in the photo
@@ -837,43 +830,29 @@ def _rerank(search: _Search, poses: np.ndarray, score: np.ndarray, second: np.nd
     """:func:`rerank_far_horizon` of the far-horizon poses at one fov: the moved poses, their
     new scores (the first ranking from now on) and their second ranking; the rest left out."""
     params = search.params
-    screen = params.rerank_screen_fov_unknown if search.fov is None else 0
     pick, moved, rescored = rerank_far_horizon(search.terrain, poses, score, second, search.intrinsics(fov_i),
-                                               search.height, search.sky, search.weights, params, screen)
+                                               search.height, search.sky, search.weights, params)
     search.stats.verified += len(pick) * params.rerank_grid ** 2
-    if screen:
-        search.stats.verified += min(len(poses), 2 * params.horizon_rerank) * params.rerank_screen_grid ** 2
     return moved, rescored, second[pick]
 
 
 def rerank_far_horizon(terrain, poses: np.ndarray, score: np.ndarray, second: np.ndarray, intrinsics, height: float,
-                       sky: np.ndarray, weights: np.ndarray, params: LocalizeParams, screen_keep: int = 0):
+                       sky: np.ndarray, weights: np.ndarray, params: LocalizeParams):
     """The best ``params.horizon_rerank`` poses by each ranking (``score``, ``second``), each moved
-    to the best of a grid around it (:func:`local_rescore`): (their indices, moved poses, scores).
-    ``screen_keep`` > 0: those poses are first moved on the coarser screening grid
-    (``params.rerank_screen_grid``, ``rerank_screen_stride``) and only the best ``screen_keep`` by
-    its score and by ``second`` go on to the full grid."""
+    to the best of a grid around it (:func:`local_rescore`): (their indices, moved poses, scores)."""
     k = params.horizon_rerank
     pick = np.unique(np.r_[np.argsort(score, kind="stable")[:k], np.argsort(second, kind="stable")[:k]])
-    if 0 < screen_keep < len(pick):
-        _, screened = local_rescore(terrain, poses[pick], intrinsics, height, sky, weights, params.rerank_half_m,
-                                    params.rerank_screen_grid,
-                                    rerank_columns(params, intrinsics.width, params.rerank_screen_stride), params.score)
-        kept = np.r_[np.argsort(screened, kind="stable")[:screen_keep], np.argsort(second[pick], kind="stable")[:screen_keep]]
-        pick = pick[np.unique(kept)]
     moved, rescored = local_rescore(terrain, poses[pick], intrinsics, height, sky, weights, params.rerank_half_m,
                                     params.rerank_grid, rerank_columns(params, intrinsics.width), params.score)
     return pick, moved, rescored
 
 
-def rerank_columns(params: LocalizeParams, width_px: int, stride: int | None = None) -> int:
-    """The re-ranking's column stride on a photo ``width_px`` wide: ``stride`` (default
-    ``params.rerank_stride``) scaled from :data:`SCORE_REFERENCE_WIDTH_PX` (at least 1), or
-    ``params.verify_stride`` where that is None."""
-    stride = params.rerank_stride if stride is None else stride
-    if stride is None:
+def rerank_columns(params: LocalizeParams, width_px: int) -> int:
+    """The re-ranking's column stride on a photo ``width_px`` wide: ``params.rerank_stride`` scaled from
+    :data:`SCORE_REFERENCE_WIDTH_PX` (at least 1), or ``params.verify_stride`` where that is None."""
+    if params.rerank_stride is None:
         return params.verify_stride
-    return max(1, int(round(stride * width_px / SCORE_REFERENCE_WIDTH_PX)))
+    return max(1, int(round(params.rerank_stride * width_px / SCORE_REFERENCE_WIDTH_PX)))
 
 
 def _screen_chunk(search: _Search, chunk: Hypotheses, fov_i: float, keep_for_sweep: bool = False) -> None:
