@@ -4,11 +4,12 @@
 
 Training side only (CH1 train and dev photos of the fov-unknown set, ``../dem-window/unknown/``), fov unknown, photo
 preset. Each photo is localized as shipped; at every call of the re-ranking (one per best-fitting fov) its poses are
-also screened (``LocalizeParams.rerank_screen_fov_unknown``'s coarse grids: grid, column stride at 1,024 wide) and
-the arrays are kept (``calls.npz``). Printed per call: the rank, by the full re-ranking's score, of the best pose it
-moves to within 1 km of the true position (a right place; - where none), and that pose's rank by the search's score
-before moving, by its cost (the second ranking) and by each screen's score: a screen (or a plain cut of the poses by
-their first rankings, ``horizon_rerank``) keeping that many by either ranking would keep the right place.
+also screened: moved on a coarser grid (``local_rescore``: grid over the same +-300 m, columns rendered every
+stride-th at 1,024 wide) as a cheap first pass could be, and the arrays are kept (``--out``, an npz). Printed per
+call: the rank, by the full re-ranking's score, of the best pose it moves to within 1 km of the true position (a
+right place; - where none), and that pose's rank by the search's score before moving, by its cost (the second
+ranking) and by each screen's score: a screen (or a plain cut of the poses by their first rankings,
+``horizon_rerank``) keeping that many by either ranking would keep the right place.
 """
 
 from __future__ import annotations
@@ -52,14 +53,14 @@ def main() -> None:
     full = pipeline.rerank_far_horizon
     calls, arrays = [], {}
 
-    def recorded(terrain, poses, score, second, intrinsics, height, sky, weights, params, screen_keep=0):
+    def recorded(terrain, poses, score, second, intrinsics, height, sky, weights, params):
         t = time.perf_counter()
-        out = full(terrain, poses, score, second, intrinsics, height, sky, weights, params, 0)
+        out = full(terrain, poses, score, second, intrinsics, height, sky, weights, params)
         record = {"full_s": time.perf_counter() - t, "screen_s": [], "screened": []}
         for grid, stride in SCREENS:
             t = time.perf_counter()
             _, s = local_rescore(terrain, poses, intrinsics, height, sky, weights, params.rerank_half_m, grid,
-                                 pipeline.rerank_columns(params, intrinsics.width, stride), params.score)
+                                 max(1, round(stride * intrinsics.width / 1024)), params.score)
             record["screen_s"].append(time.perf_counter() - t)
             record["screened"].append(s)
         record.update(poses=poses, moved=out[1], rescored=out[2], score=score, second=second, pick=out[0])
