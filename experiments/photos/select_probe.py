@@ -1,12 +1,10 @@
-"""A photo about 1,024 px wide extracted on a reduced copy (``select``), the boundary refined at full resolution.
+"""``select`` on every photo of a side, as shipped (0) and with SkylineParams fields set to each value given.
 
-Usage: python experiments/photos/reduced-1024/probe.py SIDE 0,768,640 OUT.json
-
-Issue 18's speed goal is 0.5 s for a 1,024-wide photo; ``select`` takes 0.82 s (``make bench-skyline``). Photos wider
-than ``SkylineParams.work_width`` (1,600) are already extracted on a copy ``reduced_width`` wide and refined in a band
-around the scaled-up boundary (on 4x up-scaled dev photos at 1,024 as well as at 1,600). Here every photo of a side,
-as it is, with ``work_width = reduced_width`` = each width given (0: as shipped, no reduced copy). The dev side
-chooses (rule in README.md, set before the run); the validation side is run once, for the chosen width only.
+Usage: python experiments/photos/select_probe.py SIDE FIELDS VALUES OUT.json
+e.g. ``dev work_width,reduced_width 0,768,640,512`` (``reduced-1024/``: a photo about 1,024 px wide extracted on a
+copy that wide), ``dev select_gmm_width 0,640,512`` (``select-gmm-reduced/``: only select's gmm line on such a copy).
+Per photo and width: the share of columns within 5 px, the median error and the seconds; then the summary
+against the target. The dev side chooses; the validation side is run once, for the chosen value only.
 """
 
 import json
@@ -22,23 +20,24 @@ from skyrender.features import extract_skyline, load_photo
 from skyrender.features.skyline import SkylineParams
 
 
-def params_for(width: int) -> SkylineParams:
-    return SkylineParams(method="select") if width == 0 else SkylineParams(method="select", work_width=width,
-                                                                           reduced_width=width)
+def params_for(fields: list[str], value: int) -> SkylineParams:
+    """``select`` with each of ``fields`` set to ``value`` (0: as shipped)."""
+    return SkylineParams(method="select", **({f: value for f in fields} if value else {}))
 
 
 def main() -> None:
-    side, widths, out = sys.argv[1], [int(w) for w in sys.argv[2].split(",")], sys.argv[3]
+    side, fields, out = sys.argv[1], sys.argv[2].split(","), sys.argv[4]
+    widths = [int(w) for w in sys.argv[3].split(",")]
     rows = []
-    print(f"commit {git_commit()}; {side} side; select on each photo as it is (0) and on a copy each width wide")
-    extract_skyline(load_photo(items_on_side(side)[0].image_path), params_for(0))  # warm: the network loaded once
+    print(f"commit {git_commit()}; {side} side; select as shipped (0) and with {', '.join(fields)} at each value")
+    extract_skyline(load_photo(items_on_side(side)[0].image_path), params_for(fields, 0))  # warm: the network loaded once
     for it in items_on_side(side):
         image = load_photo(it.image_path)
         truth = it.truth_skyline()
         row = {"photo": it.key, "width": image.shape[1]}
         for w in widths:
             t = time.perf_counter()
-            r = extract_skyline(image, params_for(w))
+            r = extract_skyline(image, params_for(fields, w))
             s = time.perf_counter() - t
             e = column_errors(r.skyline, truth)
             row[str(w)] = {"median": float(np.median(e)), "within5": float(np.mean(e <= 5)), "seconds": s}
