@@ -2,7 +2,8 @@
 
 Usage: python experiments/photos/select_probe.py SIDE FIELDS VALUES OUT.json
 e.g. ``dev work_width,reduced_width 0,768,640,512`` (``reduced-1024/``: a photo about 1,024 px wide extracted on a
-copy that wide), ``dev select_gmm_width 0,640,512`` (``select-gmm-reduced/``: only select's gmm line on such a copy).
+copy that wide), ``dev select_gmm_width 0,768,640,512`` at 94dd519 (``select-gmm-reduced/``: only select's gmm line
+on such a copy, an option since removed).
 Per photo and width: the share of columns within 5 px, the median error and the seconds; then the summary
 against the target. The dev side chooses; the validation side is run once, for the chosen value only.
 """

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
@@ -102,9 +102,6 @@ class SkylineParams:
     # the target against 48, and one CH1 right answer loses its confidence (experiments/photos/select-gate/).
     # A localization takes 12-30 s: the 0.35 s is not worth it there.
     select_gmm_above: float = 0.0
-    # "select": gmm runs on a copy this wide, its line refined at full resolution in a band as a wide photo's is
-    # (:func:`_extract_reduced`); 0: at full resolution. An option for speed (experiments/photos/select-gmm-reduced/)
-    select_gmm_width: int = 0
     # gmm: the colour edge counts at a boundary only as far as P(sky) changes across it (|mean over the 2 rows above
     # - the 2 below| times this, at most 1; 0: edges count wherever they are). Off by default: it stops a faint edge
     # inside a slope from pulling the boundary under a thin band of it (the slope render of issue 18: 17 px -> 0),
@@ -288,7 +285,8 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
             hybrid = _extract(image, features, edges, "hybrid", params)
             if not hybrid_in_doubt(hybrid, params.select_gmm_above):
                 return hybrid
-            return select_skylines(hybrid, _select_gmm(image, features, edges, params), params.select_tol_px)
+            gmm = _extract(image, features, edges, "gmm", params)
+            return select_skylines(hybrid, gmm, params.select_tol_px)
         from threadpoolctl import threadpool_limits
 
         from ..blocks import concurrently
@@ -298,7 +296,7 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
         # can widen them under the other
         with threadpool_limits(1):
             hybrid, gmm = concurrently(lambda: _extract(image, features, edges, "hybrid", params),
-                                       lambda: _select_gmm(image, features, edges, params))
+                                       lambda: _extract(image, features, edges, "gmm", params))
         return select_skylines(hybrid, gmm, params.select_tol_px)
     if params.method not in ("gmm", "net", "hybrid"):
         raise ValueError(f"unknown skyline method {params.method!r} (select, hybrid, net or gmm)")
@@ -329,15 +327,6 @@ def _extract(image: np.ndarray, features: np.ndarray, edges: np.ndarray, method:
     # the confidence model was fitted on the network's probability: its cues come from that
     return ExtractedSkyline(skyline, column_confidence(p_net, rows, contrast, skyline, fitted=True,
                                                        net_width=params.net_width, net_weights=params.net_weights), p)
-
-
-def _select_gmm(image: np.ndarray, features: np.ndarray, edges: np.ndarray, params: SkylineParams) -> ExtractedSkyline:
-    """``select``'s gmm line: at full resolution, or with ``params.select_gmm_width`` set (and the photo wider) on a
-    copy that wide, refined at full resolution (the photo's cables already painted over)."""
-    if 0 < params.select_gmm_width < image.shape[1]:
-        return _extract_reduced(image, replace(params, method="gmm", cables=None, work_width=params.select_gmm_width,
-                                               reduced_width=params.select_gmm_width))
-    return _extract(image, features, edges, "gmm", params)
 
 
 def hybrid_in_doubt(hybrid: ExtractedSkyline, share: float) -> bool:
