@@ -198,6 +198,8 @@ class LocalizeParams:
     # so there the scaling only thins the renders of a narrower photo
     rerank_stride: int | None = None
     rerank_fov_unknown: bool = True  # ... with the fov unknown too (False: only with the fov given)
+    # ... and then the best this many by each ranking at each of its two best fovs (None: horizon_rerank)
+    horizon_rerank_fov_unknown: int | None = None
     # a given fov is only a start: every candidate's refinement fits the focal length too, within given_focal_range
     # (a fraction) of the given one. Not for an EXIF fov (the CLI's until 2026-12-05: unbounded, on the CH1 training
     # side it answered 2 photos 1.7 and 69 km off at 0.98 and 0.95; experiments/ch1/exif-fov/), nor in the photo
@@ -830,6 +832,8 @@ def _rerank(search: _Search, poses: np.ndarray, score: np.ndarray, second: np.nd
     """:func:`rerank_far_horizon` of the far-horizon poses at one fov: the moved poses, their
     new scores (the first ranking from now on) and their second ranking; the rest left out."""
     params = search.params
+    if search.fov is None and params.horizon_rerank_fov_unknown is not None:
+        params = replace(params, horizon_rerank=params.horizon_rerank_fov_unknown)
     pick, moved, rescored = rerank_far_horizon(search.terrain, poses, score, second, search.intrinsics(fov_i),
                                                search.height, search.sky, search.weights, params)
     search.stats.verified += len(pick) * params.rerank_grid ** 2
