@@ -1009,6 +1009,34 @@ def test_far_horizon_poses_are_moved_before_ranking_with_the_fov_given_and_not_u
         _assert_close(result, pose)
 
 
+def test_with_the_fov_unknown_the_re_ranking_moves_only_its_own_number_of_poses_by_each_ranking(scene, views,
+                                                                                                 monkeypatch):
+    """``horizon_rerank_fov_unknown``: with the fov unknown the re-ranking moves the best that many poses by each
+    ranking instead of ``horizon_rerank`` (the rest left out); with the fov given ``horizon_rerank`` as before. The
+    view is localized either way."""
+    from dataclasses import replace
+
+    from skyrender.localizer import pipeline
+
+    moved, rerank = [], pipeline.rerank_far_horizon
+
+    def counted(*args, **kwargs):
+        out = rerank(*args, **kwargs)
+        moved.append(len(out[0]))
+        return out
+
+    monkeypatch.setattr(pipeline, "rerank_far_horizon", counted)
+    _, terrain, model = scene
+    pose = views.poses[4]
+    params = replace(LocalizeParams(), max_hypotheses=0, horizon_rerank=6, horizon_rerank_fov_unknown=1, rerank_grid=3,
+                     rerank_half_m=150.0, rerank_stride=16, fov_candidates=(60.0,), horizon_fov_step=())
+    _assert_close(localize(_photo(terrain, pose), model, 2.0, 60.0, terrain=terrain, params=params), pose)
+    assert len(moved) == 1 and 6 <= moved[0] <= 12
+    moved.clear()
+    _assert_close(localize(_photo(terrain, pose), model, 2.0, None, terrain=terrain, params=params), pose)
+    assert moved and all(1 <= n <= 2 for n in moved)
+
+
 def test_the_re_ranking_renders_as_many_columns_on_a_photo_of_any_width():
     """The photo preset's re-ranking renders every 32nd column of a 1,024-wide CH1 photo; a 12 MP phone photo (4,032
     columns) as many columns, not four times as many; without a stride of its own, the verification's."""

@@ -117,6 +117,8 @@ class LocalizeParams:
     neighbours: str = "nearest"  # model triples: an anchor's k nearest (the paper's) or "covisible" features
     neighbours_k: int | None = None  # ... this many of them (None: the model's k)
     verify_stride: int = 4  # every n-th column in the verification renders
+    # ... of the far-horizon poses with the fov unknown (None: verify_stride); they are verified at every fov tried
+    verify_stride_fov_unknown: int | None = None
     confidence_power: float = 1.0  # column weights = the skyline's per-column confidence (>= 0.05) to this power
     # a photo wider than this (px) is searched on its skyline reduced to this many columns (:func:`reduce_skyline`):
     # poses are angles and come out the same, every pixel threshold means what it means on photos this wide, and a
@@ -786,7 +788,9 @@ def _far_horizon_candidates(search: _Search) -> None:
                 poses, cost = poses[seen], cost[seen]
             stats.generated += len(poses)
         with stats.timed("verification"):
-            score, trusted = verify_poses(search.terrain, poses, k_i, search.sky, search.weights, params.verify_stride,
+            stride = params.verify_stride if search.fov is not None or params.verify_stride_fov_unknown is None \
+                else params.verify_stride_fov_unknown
+            score, trusted = verify_poses(search.terrain, poses, k_i, search.sky, search.weights, stride,
                                           params=params.score)
             if params.horizon.rank_by_cost:  # the second ranking: the search's own cost
                 trusted = cost
