@@ -57,8 +57,8 @@ bench-split: install
 # python -m skyrender.benchmarks.real_localize --side train --fov unknown --limit 20 --no-abstain --tag unknown-train
 #   --out experiments/ch1/dem-window/unknown, and --side dev (all 21) --tag unknown-dev)
 fit-photo-confidence: install
-	$(BIN)/python -m skyrender.training.localize_fit --fov-unknown-rows experiments/ch1/other-fov-runner-up/bench-real-train-both.json \
-		experiments/ch1/other-fov-runner-up/bench-real-dev-both.json
+	$(BIN)/python -m skyrender.training.localize_fit --fov-unknown-rows experiments/ch1/rerank-cut-fov-unknown/bench-real-train-cut300.json \
+		experiments/ch1/rerank-cut-fov-unknown/bench-real-dev-cut300.json
 
 # retrain the sky network and refit the boundary search on the training split (CPU, ~10 min);
 # reproduces skyrender/features/weights/ for the seed

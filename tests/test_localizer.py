@@ -1009,41 +1009,34 @@ def test_far_horizon_poses_are_moved_before_ranking_with_the_fov_given_and_not_u
         _assert_close(result, pose)
 
 
-def test_with_the_fov_unknown_the_far_horizon_poses_are_verified_and_moved_on_budgets_of_their_own(scene, views,
-                                                                                                   monkeypatch):
-    """With the fov unknown the far-horizon poses are verified on every ``verify_stride_fov_unknown``-th column and
-    the re-ranking moves the best ``horizon_rerank_fov_unknown`` by each ranking (the rest left out); with the fov
-    given ``verify_stride`` and ``horizon_rerank`` as before. The view is localized either way."""
+def test_with_the_fov_unknown_the_re_ranking_moves_only_its_own_number_of_poses_by_each_ranking(scene, views,
+                                                                                                 monkeypatch):
+    """``horizon_rerank_fov_unknown``: with the fov unknown the re-ranking moves the best that many poses by each
+    ranking instead of ``horizon_rerank`` (the rest left out); with the fov given ``horizon_rerank`` as before. The
+    view is localized either way. The photo preset moves 300 by each ranking with the fov unknown, all with it given."""
     from dataclasses import replace
 
     from skyrender.localizer import pipeline
 
-    moved, strides, rerank, verify = [], [], pipeline.rerank_far_horizon, pipeline.verify_poses
+    moved, rerank = [], pipeline.rerank_far_horizon
 
     def counted(*args, **kwargs):
         out = rerank(*args, **kwargs)
         moved.append(len(out[0]))
         return out
 
-    def verified(terrain, poses, intrinsics, sky, weights, stride, **kwargs):
-        strides.append(stride)
-        return verify(terrain, poses, intrinsics, sky, weights, stride, **kwargs)
-
     monkeypatch.setattr(pipeline, "rerank_far_horizon", counted)
-    monkeypatch.setattr(pipeline, "verify_poses", verified)
     _, terrain, model = scene
     pose = views.poses[4]
     params = replace(LocalizeParams(), max_hypotheses=0, horizon_rerank=6, horizon_rerank_fov_unknown=1, rerank_grid=3,
-                     rerank_half_m=150.0, rerank_stride=16, verify_stride_fov_unknown=8, fov_candidates=(60.0,),
-                     horizon_fov_step=())
+                     rerank_half_m=150.0, rerank_stride=16, fov_candidates=(60.0,), horizon_fov_step=())
     _assert_close(localize(_photo(terrain, pose), model, 2.0, 60.0, terrain=terrain, params=params), pose)
     assert len(moved) == 1 and 6 <= moved[0] <= 12
-    assert strides and set(strides) == {params.verify_stride}
     moved.clear()
-    strides.clear()
     _assert_close(localize(_photo(terrain, pose), model, 2.0, None, terrain=terrain, params=params), pose)
     assert moved and all(1 <= n <= 2 for n in moved)
-    assert strides and set(strides) == {8}
+    photo = LocalizeParams.for_photos()
+    assert photo.horizon_rerank_fov_unknown == 300 and photo.horizon_rerank >= 10_000
 
 
 def test_the_re_ranking_renders_as_many_columns_on_a_photo_of_any_width():

@@ -117,8 +117,6 @@ class LocalizeParams:
     neighbours: str = "nearest"  # model triples: an anchor's k nearest (the paper's) or "covisible" features
     neighbours_k: int | None = None  # ... this many of them (None: the model's k)
     verify_stride: int = 4  # every n-th column in the verification renders
-    # ... of the far-horizon poses with the fov unknown (None: verify_stride); they are verified at every fov tried
-    verify_stride_fov_unknown: int | None = None
     confidence_power: float = 1.0  # column weights = the skyline's per-column confidence (>= 0.05) to this power
     # a photo wider than this (px) is searched on its skyline reduced to this many columns (:func:`reduce_skyline`):
     # poses are angles and come out the same, every pixel threshold means what it means on photos this wide, and a
@@ -200,7 +198,9 @@ class LocalizeParams:
     # so there the scaling only thins the renders of a narrower photo
     rerank_stride: int | None = None
     rerank_fov_unknown: bool = True  # ... with the fov unknown too (False: only with the fov given)
-    # ... and then the best this many by each ranking at each of its two best fovs (None: horizon_rerank)
+    # ... and then the best this many by each ranking at each of its two best fovs, the rest left out (None:
+    # horizon_rerank). The photo preset's 300 of its ~4,000: the right places the full re-ranking puts first lay
+    # among the search's best 300 by score at one of the two fovs (experiments/ch1/rerank-screen/)
     horizon_rerank_fov_unknown: int | None = None
     # a given fov is only a start: every candidate's refinement fits the focal length too, within given_focal_range
     # (a fraction) of the given one. Not for an EXIF fov (the CLI's until 2026-12-05: unbounded, on the CH1 training
@@ -272,9 +272,13 @@ class LocalizeParams:
                    # refined beside them (2 by each ranking), so that an answer's margin is taken against places
                    # found at other focal lengths as well: on the 41 training-side photos 14 -> 18 best places
                    # within 1 km, and the mode's threshold 0.95 instead of 1.00 (neither alone brought it below
-                   # 1.00: experiments/ch1/other-fov-runner-up/, ../rerank-fov-unknown/); about 45-50 s a photo instead of 28
+                   # 1.00: experiments/ch1/other-fov-runner-up/, ../rerank-fov-unknown/). There only the best 300
+                   # poses by each ranking are moved: on the 41 training-side photos 17 within 1 km instead of 18 and
+                   # 13 answered (all right) instead of 14, on validation the same 24 of 60 answered (all right), in
+                   # 33.8 s a photo instead of 45.2 (experiments/ch1/rerank-cut-fov-unknown/)
                    horizon_rerank=PHOTO_HORIZON_RERANK, rerank_grid=7, rerank_half_m=300.0, rerank_stride=32,
-                   rerank_fov_unknown=True, other_fov_refinements=2, search_width=int(SCORE_REFERENCE_WIDTH_PX),
+                   rerank_fov_unknown=True, horizon_rerank_fov_unknown=300, other_fov_refinements=2,
+                   search_width=int(SCORE_REFERENCE_WIDTH_PX),
                    horizon=HorizonSearchParams(tilts=(-10.0, 0.0, 10.0, 20.0, 30.0), terms=2, rank_by_cost=True))
 
     def skyline_params(self) -> SkylineParams:
@@ -788,9 +792,7 @@ def _far_horizon_candidates(search: _Search) -> None:
                 poses, cost = poses[seen], cost[seen]
             stats.generated += len(poses)
         with stats.timed("verification"):
-            stride = params.verify_stride if search.fov is not None or params.verify_stride_fov_unknown is None \
-                else params.verify_stride_fov_unknown
-            score, trusted = verify_poses(search.terrain, poses, k_i, search.sky, search.weights, stride,
+            score, trusted = verify_poses(search.terrain, poses, k_i, search.sky, search.weights, params.verify_stride,
                                           params=params.score)
             if params.horizon.rank_by_cost:  # the second ranking: the search's own cost
                 trusted = cost
