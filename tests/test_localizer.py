@@ -1283,7 +1283,9 @@ def test_refinement_fits_a_given_focal_length_within_its_bound(scene, views):
 def test_skylines_aligned_in_blocks_of_poses_are_the_whole_arrays_to_the_bit(monkeypatch, roll, trusted):
     """:func:`align_skylines` works through many poses in blocks (on all cores), the last one
     padded: any block size gives the scores, agreements and fitted shifts, offsets and slopes
-    of one block holding every pose, to the bit (NaN columns, trust and a roll bound included)."""
+    of one block holding every pose, to the bit (NaN columns, trust and a roll bound included).
+    The blocks try the coarse shifts in the compiled kernel, the one block in numpy's passes: the
+    kernel gives numpy's values to the bit; without the agreement, the same scores and fits."""
     from skyrender.localizer import verification
 
     rng = np.random.default_rng(8)
@@ -1305,6 +1307,11 @@ def test_skylines_aligned_in_blocks_of_poses_are_the_whole_arrays_to_the_bit(mon
         for rows in (512, 7):
             for whole, blocked in zip(out[10 ** 6], out[rows]):
                 assert np.array_equal(whole, blocked)
+        lean = align_skylines(rendered, image, columns, 320.0, weights, params=params, trust=trust, swing=swing,
+                              agreement=False)
+        assert lean[1] is None
+        for full, without in zip(out[7][::2] + out[7][3:4], lean[::2] + lean[3:4]):
+            assert np.array_equal(full, without)
 
 
 @pytest.mark.parametrize("terms, roll", [(2, math.inf), (3, math.inf), (2, 8.0)])

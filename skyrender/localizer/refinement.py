@@ -262,7 +262,7 @@ def local_rescore(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, h
     if ok.any():
         rendered, cols = strided_skylines(terrain, grid[ok], intrinsics, stride, tol_px=0.5)
         s, _, a, b, c = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols], params=params,
-                                       swing=grid[ok][:, 5])
+                                       swing=grid[ok][:, 5], agreement=False)
         score[ok] = s
         grid[ok] = realigned(grid[ok], a, b, c, intrinsics.f_px)
     score = score.reshape(P, n * n)
@@ -310,7 +310,7 @@ def local_search(terrain: Terrain, seeds: list[np.ndarray], intrinsics: Intrinsi
         renders += len(poses)
         score, _, a, b, c = align_skylines(rendered, image_skyline[cols], cols, intrinsics.cx, weights[cols],
                                            shifts=SHIFTS_PX if n_level == 0 else fine_shifts, params=params,
-                                           swing=poses[:, 5])
+                                           swing=poses[:, 5], agreement=False)
         poses = realigned(poses, a, b, c, f_px)
         spacing = min(2 * level[1] / max(level[3] - 1, 1), 2 * level[0] / max(level[2] - 1, 1))
         seeds = best_apart(poses, score, refine.search_beam, spacing)

@@ -21,6 +21,7 @@ whose own skyline is near poorly, so :func:`verify_poses` gives both scores.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -58,29 +59,36 @@ class ScoreParams:
 def column_errors(rendered: np.ndarray, image: np.ndarray, cap_px: float) -> np.ndarray:
     """(..., W) rendered - image (px); a column where exactly one of them is NaN
     (sky only) counts as -cap (terrain missing or extra is never an occluder), both NaN as 0."""
-    e = rendered - image
-    one_nan = np.isnan(rendered) ^ np.isnan(image)
-    e = np.where(one_nan, -cap_px, e)
-    return np.where(np.isnan(e), 0.0, e)
+    e = np.asarray(rendered - image)
+    rendered_nan = np.isnan(rendered)
+    np.copyto(e, -cap_px, where=rendered_nan)  # where the image has a skyline; its own NaN columns next
+    image_nan = np.isnan(image)
+    if image_nan.any():  # few columns: those of the photo's skyline that see only sky
+        e[..., image_nan] = np.where(np.broadcast_to(rendered_nan, e.shape)[..., image_nan], 0.0, -cap_px)
+    return e
 
 
 def score_skylines(rendered: np.ndarray, image: np.ndarray, weights: np.ndarray,
                    params: ScoreParams = ScoreParams(),
-                   trust: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                   trust: np.ndarray | None = None, agreement: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
     """Robust score (px, lower is better) and agreement share of rendered skylines
     (P, W) against the photo's (W,), with per-column weights (W,) in [0, 1]; a
     column's ``trust`` ((P, W) in [0, 1]; None: all 1) counts its cost, the rest of it
-    costs ``params.untrusted_px``."""
+    costs ``params.untrusted_px``. With ``agreement`` False the share is not computed (None)."""
     e = column_errors(rendered, image, params.cap_px)
-    cost = np.where(e < 0, np.minimum(-e, params.cap_px), params.occluder_weight * np.minimum(e, params.cap_px))
-    agree = np.abs(e) <= params.agree_px
+    size = np.abs(e)
+    cost = np.minimum(size, params.cap_px)
+    np.multiply(cost, params.occluder_weight, out=cost, where=e >= 0)  # photo skyline above: maybe an occluder
+    total = max(float(np.sum(weights)), 1e-9)
     if trust is not None:
         cost = trust * cost + (1.0 - trust) * params.untrusted_px
-        agree = agree * trust
-    total = max(float(np.sum(weights)), 1e-9)
     score = (cost * weights).sum(axis=-1) / total
-    agreement = (agree * weights).sum(axis=-1) / total
-    return score, agreement
+    if not agreement:
+        return score, None
+    agree = size <= params.agree_px
+    if trust is not None:
+        agree = agree * trust
+    return score, (agree * weights).sum(axis=-1) / total
 
 
 def part_margins(rendered: np.ndarray, image: np.ndarray, weights: np.ndarray, parts: int = 2,
@@ -106,7 +114,8 @@ def trust_of_distance(distance: np.ndarray, params: ScoreParams = ScoreParams())
 
 def align_skylines(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx: float, weights: np.ndarray,
                    shifts: np.ndarray = SHIFTS_PX, params: ScoreParams = ScoreParams(),
-                   trust: np.ndarray | None = None, coarse: int = 3, swing: np.ndarray | None = None):
+                   trust: np.ndarray | None = None, coarse: int = 3, swing: np.ndarray | None = None,
+                   agreement: bool = True):
     """Best 2-D alignment of rendered skylines (P, n) to the photo's (n,), both sampled
     at image columns ``columns`` (u = column + 0.5): the rendered curve moved right by
     ``a`` px and by ``b + c (u - cx)`` px down, a from ``shifts`` (evenly spaced), b and
@@ -116,7 +125,8 @@ def align_skylines(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray,
     pose's best (on rendered skylines sampled every few px the score is smooth in a).
     ``swing`` (P,) deg: the poses' roll (None: 0); the slope c is kept to what leaves it
     within ``params.max_swing_deg`` (:func:`slope_bounds`).
-    Returns (score, agreement, a, b, c), each (P,).
+    Returns (score, agreement, a, b, c), each (P,); the agreement None unless ``agreement``
+    (it costs a pass of its own, and the localizer ranks by the score).
 
     Every operation is row-wise, so many poses are aligned in blocks of
     :data:`ALIGN_BLOCK_ROWS` on all cores (2-3x faster on 2 cores: a CH1 photo's 4,077
@@ -130,40 +140,54 @@ def align_skylines(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray,
     swing = np.zeros(P) if swing is None else np.asarray(swing, np.float64)
     per_block = max(ALIGN_BLOCK_ROWS, -(-MIN_BLOCK_ELEMENTS // max(rendered.shape[1], 1)))
     if P <= per_block:
-        return _align_rows(rendered, image, columns, cx, weights, shifts, params, trust, coarse, swing)
-    out = tuple(np.empty(P) for _ in range(5))
+        return _align_rows(rendered, image, columns, cx, weights, shifts, params, trust, coarse, swing, agreement)
+    out = [np.empty(P) for _ in range(5)]
+    if not agreement:
+        out[1] = None
 
     def rows(lo: int, hi: int) -> None:
         take = np.minimum(np.arange(lo, lo + per_block), P - 1)  # the last block padded with its last row
         part = _align_rows(rendered[take], image, columns, cx, weights, shifts, params,
-                           None if trust is None else trust[take], coarse, swing[take])
+                           None if trust is None else trust[take], coarse, swing[take], agreement, compiled=True)
         for whole, values in zip(out, part):
-            whole[lo:hi] = values[: hi - lo]
+            if whole is not None:
+                whole[lo:hi] = values[: hi - lo]
 
     in_blocks(P, per_block, rows)
-    return out
+    return tuple(out)
 
 
 def _align_rows(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx: float, weights: np.ndarray,
                 shifts: np.ndarray, params: ScoreParams, trust: np.ndarray | None, coarse: int,
-                swing: np.ndarray) -> tuple:
+                swing: np.ndarray, agreement: bool = True, compiled: bool = False) -> tuple:
     """:func:`align_skylines` of some poses: ``rendered`` (P, n) float32, ``trust`` (P, n) float32
-    or None, ``swing`` (P,) deg."""
+    or None, ``swing`` (P,) deg. With ``compiled`` the every-``coarse``-th shifts are tried by
+    :func:`_coarse_fits` (a block of :func:`align_skylines`, where it gives numpy's values)."""
     shifts = np.asarray(shifts, np.float64)
     P = len(rendered)
-    best = (np.full(P, np.inf), np.zeros(P), np.zeros(P), np.zeros(P), np.zeros(P))
     bounds = slope_bounds(swing, params.max_swing_deg)
     coarse = coarse if len(shifts) > 5 * coarse else 1
-    for a in shifts[::coarse]:
-        best = _better(best, _aligned_at(rendered, image, columns, cx, weights, a, params, trust, bounds))
+
+    def at(a):  # the agreement only at each pose's best shift, below
+        score, _, *abc = _aligned_at(rendered, image, columns, cx, weights, a, params, trust, bounds, agreement=False)
+        return score, *abc
+
+    if compiled:
+        best = _coarse_fits(rendered, image, columns, cx, weights, shifts[::coarse], params, trust, bounds)
+    else:
+        best = (np.full(P, np.inf), np.zeros(P), np.zeros(P), np.zeros(P))  # score, a, b, c
+        for a in shifts[::coarse]:
+            best = _better(best, at(a))
     if coarse > 1:
         step = shifts[1] - shifts[0]
-        centre = best[2].copy()
+        centre = best[1].copy()
         for k in range(1 - coarse, coarse):
             if k:
-                a = np.clip(centre + k * step, shifts[0], shifts[-1])
-                best = _better(best, _aligned_at(rendered, image, columns, cx, weights, a, params, trust, bounds))
-    return best
+                best = _better(best, at(np.clip(centre + k * step, shifts[0], shifts[-1])))
+    share = None
+    if agreement:  # at each pose's best shift: the same fit, its agreement (indexed otherwise: to the last bits)
+        share = _aligned_at(rendered, image, columns, cx, weights, best[1], params, trust, bounds)[1]
+    return best[0], share, *best[1:]
 
 
 def slope_bounds(swing: np.ndarray, max_swing_deg: float) -> tuple[np.ndarray, np.ndarray] | None:
@@ -179,15 +203,17 @@ def slope_bounds(swing: np.ndarray, max_swing_deg: float) -> tuple[np.ndarray, n
 
 
 def _better(best: tuple, new: tuple) -> tuple:
-    """Per pose, the (score, agreement, a, b, c) tuple with the lower score."""
+    """Per pose, the (score, ...) tuple with the lower score."""
     improved = new[0] < best[0]
     return tuple(np.where(improved, n, o) for n, o in zip(new, best))
 
 
 def _aligned_at(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx: float, weights: np.ndarray,
-                a: np.ndarray, params: ScoreParams, trust: np.ndarray | None, bounds: tuple | None = None) -> tuple:
+                a: np.ndarray, params: ScoreParams, trust: np.ndarray | None, bounds: tuple | None = None,
+                agreement: bool = True) -> tuple:
     """:func:`align_skylines` at one shift ``a`` (px; a float, or one per pose (P,)), the slope
-    within ``bounds`` (:func:`slope_bounds`; None: free): (score, agreement, a, b, c), each (P,)."""
+    within ``bounds`` (:func:`slope_bounds`; None: free): (score, agreement, a, b, c), each (P,)
+    (the agreement None unless ``agreement``)."""
     u = columns + 0.5
     n = len(u)
     step = u[1] - u[0] if n > 1 else 1.0
@@ -204,7 +230,11 @@ def _aligned_at(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx
         return np.take_along_axis(values, i0, 1) * (1 - t) + np.take_along_axis(values, i1, 1) * t
 
     moved = at_shift(rendered)
-    moved[np.broadcast_to((pos < 0) | (pos > n - 1), moved.shape)] = np.nan
+    outside = (pos < 0) | (pos > n - 1)
+    if np.ndim(a) == 0:
+        moved[:, outside] = np.nan
+    else:
+        moved[outside] = np.nan
     trusted = None if trust is None else at_shift(trust)
     d = image[None, :].astype(np.float32) - moved
     finite = np.isfinite(d)
@@ -212,7 +242,7 @@ def _aligned_at(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx
     w = np.where(finite, w, np.float32(0.0))
     d0 = np.where(finite, d, np.float32(0.0))
     # robust line fit: least squares, then again without the columns beyond 3 px
-    for _ in range(2):
+    for fit in range(2):
         wx = w * x
         sw, sx, sxx = w.sum(1), wx.sum(1), (wx * x).sum(1)
         sy, sxy = (w * d0).sum(1), (wx * d0).sum(1)
@@ -221,10 +251,108 @@ def _aligned_at(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx
         if bounds is not None:  # the best offset for the bounded slope
             c = np.clip(c, *bounds)
         b = (sy - c * sx) / np.maximum(sw, 1e-9)
-        w = np.where(np.abs(d0 - b[:, None] - c[:, None] * x) <= 3.0, w, np.float32(0.0))
-    score, agreement = score_skylines(moved + b[:, None] + c[:, None] * x, image, weights, params, trusted)
+        if fit == 0:
+            w = np.where(np.abs(d0 - b[:, None] - c[:, None] * x) <= 3.0, w, np.float32(0.0))
+    score, agreement = score_skylines(moved + b[:, None] + c[:, None] * x, image, weights, params, trusted,
+                                      agreement=agreement)
     return score, agreement, np.broadcast_to(np.asarray(a, np.float64), score.shape), b.astype(np.float64), \
         c.astype(np.float64)
+
+
+def _coarse_fits(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx: float, weights: np.ndarray,
+                 shifts: np.ndarray, params: ScoreParams, trust: np.ndarray | None, bounds: tuple | None) -> tuple:
+    """The best of :func:`_aligned_at` over one shift at a time (``shifts`` (S,) px) for each pose, the
+    first of equals: (score, a, b, c), each (P,); compiled (numba), 10x faster than numpy's passes.
+    It does numpy's float32 and float64 operations in their order, and sums each row from its first
+    column on, as numpy sums the rows of the column-major arrays that indexing gives; so in blocks of
+    :func:`align_skylines` (2**16 elements or more) its values are numpy's to the bit (tested; numpy
+    lays smaller arrays out otherwise now and then, and sums them in another order)."""
+    P, n = rendered.shape
+    u = columns + 0.5
+    step = u[1] - u[0] if n > 1 else 1.0
+    pos = (u[None, :] - shifts[:, None] - u[0]) / step
+    i0 = np.clip(np.floor(pos).astype(np.int64), 0, n - 1)
+    t = np.clip(pos - i0, 0.0, 1.0).astype(np.float32)
+    low, high = bounds if bounds is not None else (np.zeros(P, np.float32),) * 2
+    out = (np.empty(P), np.empty(P, np.int64), np.empty(P, np.float32), np.empty(P, np.float32))
+    _coarse_kernel()(np.ascontiguousarray(rendered, np.float32),
+                     np.zeros((0, n), np.float32) if trust is None else np.ascontiguousarray(trust, np.float32),
+                     image.astype(np.float32), np.asarray(image, np.float64), weights.astype(np.float32),
+                     np.asarray(weights, np.float64), (u - cx).astype(np.float32), i0, np.minimum(i0 + 1, n - 1), t,
+                     (1 - t).astype(np.float32), (pos < 0) | (pos > n - 1), low, high, bounds is not None,
+                     float(params.cap_px), float(params.occluder_weight), float(params.untrusted_px),
+                     max(float(np.sum(weights)), 1e-9), *out)
+    score, index, b, c = out
+    return score, shifts[index], b.astype(np.float64), c.astype(np.float64)
+
+
+@functools.cache
+def _coarse_kernel():
+    """:func:`_coarse_fits`' kernel, compiled on first use (numba, cached on disk), releasing the GIL
+    so that blocks run on all cores."""
+    import numba
+
+    f32 = np.float32
+
+    @numba.njit(nogil=True, cache=True)
+    def kernel(rendered, trust, image32, image, weights32, weights, x, i0, i1, t, one_minus_t, outside,
+               low, high, bounded, cap, occluder_weight, untrusted, total, score, index, b_out, c_out):
+        P, n = rendered.shape
+        with_trust = trust.shape[0] > 0
+        tiny, three, one, untrusted32 = f32(1e-9), f32(3.0), f32(1.0), f32(untrusted)
+        moved = np.empty(n, np.float32)
+        trusted = np.empty(n, np.float32)
+        d0 = np.empty(n, np.float32)
+        w = np.empty(n, np.float32)
+        for p in range(P):
+            best = np.inf
+            for s in range(i0.shape[0]):
+                for j in range(n):  # the rendered skyline moved by the shift, its residual and weight
+                    m = rendered[p, i0[s, j]] * one_minus_t[s, j] + rendered[p, i1[s, j]] * t[s, j]
+                    moved[j] = np.float32(np.nan) if outside[s, j] else m
+                    trusted[j] = trust[p, i0[s, j]] * one_minus_t[s, j] + trust[p, i1[s, j]] * t[s, j] \
+                        if with_trust else one
+                    d = image32[j] - moved[j]
+                    finite = np.isfinite(d)
+                    w[j] = (weights32[j] * trusted[j] if with_trust else weights32[j]) if finite else f32(0.0)
+                    d0[j] = d if finite else f32(0.0)
+                b = c = f32(0.0)
+                for fit in range(2):  # offset b + slope c by least squares, then without the columns beyond 3 px
+                    wx = w[0] * x[0]
+                    sw, sx, sxx, sy, sxy = w[0], wx, wx * x[0], w[0] * d0[0], wx * d0[0]
+                    for j in range(1, n):
+                        wx = w[j] * x[j]
+                        sw += w[j]
+                        sx += wx
+                        sxx += wx * x[j]
+                        sy += w[j] * d0[j]
+                        sxy += wx * d0[j]
+                    c = (sw * sxy - sx * sy) / max(sw * sxx - sx * sx, tiny)
+                    if bounded:
+                        c = min(max(c, low[p]), high[p])
+                    b = (sy - c * sx) / max(sw, tiny)
+                    if fit == 0:
+                        for j in range(n):
+                            if not abs(d0[j] - b - c * x[j]) <= three:
+                                w[j] = f32(0.0)
+                total_cost = 0.0
+                for j in range(n):  # score_skylines
+                    r = moved[j] + b + c * x[j]
+                    e = np.float64(r) - image[j]
+                    if np.isnan(r) or np.isnan(image[j]):
+                        e = 0.0 if np.isnan(r) and np.isnan(image[j]) else -cap
+                    cost = min(abs(e), cap)
+                    if e >= 0:
+                        cost = cost * occluder_weight
+                    if with_trust:
+                        cost = np.float64(trusted[j]) * cost + np.float64((one - trusted[j]) * untrusted32)
+                    total_cost = cost * weights[j] if j == 0 else total_cost + cost * weights[j]
+                if total_cost / total < best:
+                    best = total_cost / total
+                    index[p], b_out[p], c_out[p] = s, b, c
+            score[p] = best
+
+    return kernel
 
 
 def verify_poses(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, image_skyline: np.ndarray,
@@ -244,7 +372,7 @@ def verify_poses(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, im
     rendered, distance, cols = strided_skylines(terrain, poses, intrinsics, stride, tol_px=0.5, with_distance=True)
     image, w = image_skyline[cols], weights[cols]
     swing = np.asarray(poses, np.float64)[:, 5]
-    score, *_ = align_skylines(rendered, image, cols, intrinsics.cx, w, params=params, swing=swing)
-    trusted, *_ = align_skylines(rendered, image, cols, intrinsics.cx, w, params=params,
+    score, *_ = align_skylines(rendered, image, cols, intrinsics.cx, w, params=params, swing=swing, agreement=False)
+    trusted, *_ = align_skylines(rendered, image, cols, intrinsics.cx, w, params=params, agreement=False,
                                  trust=trust_of_distance(distance, params), swing=swing)
     return score, trusted
