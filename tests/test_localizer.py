@@ -1314,6 +1314,38 @@ def test_skylines_aligned_in_blocks_of_poses_are_the_whole_arrays_to_the_bit(mon
             assert np.array_equal(full, without)
 
 
+def test_the_compiled_alignment_sums_and_fits_as_numpy_does_to_the_bit():
+    """The alignment's kernel (:mod:`skyrender.localizer.alignment_kernel`) sums a row as numpy sums a
+    contiguous one (pairwise, float32 and float64, any length), and its fits at one shift per pose are
+    numpy's (:func:`_aligned_at`, row-major arrays) to the bit, NaN columns, trust and a roll bound included."""
+    from skyrender.localizer import verification
+    from skyrender.localizer.alignment_kernel import pairwise
+
+    rng = np.random.default_rng(11)
+    for n in (1, 7, 8, 9, 127, 128, 129, 256, 300, 512, 1000, 4099):
+        for dtype in (np.float32, np.float64):
+            rows = (rng.normal(size=(2, n)) * 100).astype(dtype)
+            assert all(pairwise(row, 0, n, dtype(0)) == total for row, total in zip(rows, rows.sum(axis=1)))
+    P, columns = 600, np.arange(2, 1024, 4)
+    image = 200.0 + np.cumsum(rng.normal(0, 2.0, len(columns)))
+    image[:3] = np.nan
+    rendered = (image[None, :] + rng.normal(0, 3.0, (P, len(columns))) + rng.normal(0, 10.0, (P, 1))).astype(np.float32)
+    rendered[rng.random(rendered.shape) < 0.02] = np.nan
+    weights = rng.uniform(0.05, 1.0, len(columns))
+    trust = rng.uniform(0.0, 1.0, rendered.shape).astype(np.float32)
+    params = ScoreParams(max_swing_deg=8.0)
+    bounds = verification.slope_bounds(rng.uniform(-5.0, 5.0, P), params.max_swing_deg)
+    shifts = rng.integers(-30, 31, (P, 3)).astype(np.float64)
+    compiled = verification._compiled_fits(rendered, image, columns, 512.0, weights, shifts, params, trust, bounds)
+    best = (np.full(P, np.inf), np.zeros(P), np.zeros(P), np.zeros(P))
+    for k in range(shifts.shape[1]):
+        score, _, *fit = verification._aligned_at(rendered, image, columns, 512.0, weights, shifts[:, k], params,
+                                                  trust, bounds, agreement=False)
+        best = verification._better(best, (score, *fit))
+    for numpy_values, kernel_values in zip(best, compiled):
+        assert np.array_equal(numpy_values, kernel_values)
+
+
 @pytest.mark.parametrize("terms, roll", [(2, math.inf), (3, math.inf), (2, 8.0)])
 def test_horizon_costs_in_blocks_of_centres_are_the_whole_arrays_to_the_bit(monkeypatch, terms, roll):
     """:func:`horizon_costs` works through the centres in blocks (on all cores): any block size

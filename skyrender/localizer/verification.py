@@ -21,7 +21,6 @@ whose own skyline is near poorly, so :func:`verify_poses` gives both scores.
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 
@@ -132,7 +131,10 @@ def align_skylines(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray,
     :data:`ALIGN_BLOCK_ROWS` on all cores (2-3x faster on 2 cores: a CH1 photo's 4,077
     far-horizon poses, a refinement level's 600 poses), with the whole arrays' values to the bit: numpy's row sums of an array
     under 2**16 elements can differ in the last bit from those of a larger one, so every block
-    holds at least that many (the last one padded with its last row).
+    holds at least that many (the last one padded with its last row). A block's shifts are tried by
+    a compiled kernel (:func:`_compiled_fits`) that gives numpy's values to the bit: on a CH1 photo
+    with the fov unknown the alignments took 10.9 s in numpy's passes and 3.5 s so
+    (experiments/ch1/compiled-alignment/). Fewer poses than a block go through numpy's passes.
     """
     P = len(rendered)
     rendered = np.asarray(rendered, np.float32)  # float32: the alignment is the verification's hot path
@@ -162,7 +164,7 @@ def _align_rows(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx
                 swing: np.ndarray, agreement: bool = True, compiled: bool = False) -> tuple:
     """:func:`align_skylines` of some poses: ``rendered`` (P, n) float32, ``trust`` (P, n) float32
     or None, ``swing`` (P,) deg. With ``compiled`` the every-``coarse``-th shifts are tried by
-    :func:`_coarse_fits` (a block of :func:`align_skylines`, where it gives numpy's values)."""
+    :func:`_compiled_fits` (a block of :func:`align_skylines`, where it gives numpy's values)."""
     shifts = np.asarray(shifts, np.float64)
     P = len(rendered)
     bounds = slope_bounds(swing, params.max_swing_deg)
@@ -173,17 +175,20 @@ def _align_rows(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx
         return score, *abc
 
     if compiled:
-        best = _coarse_fits(rendered, image, columns, cx, weights, shifts[::coarse], params, trust, bounds)
+        best = _compiled_fits(rendered, image, columns, cx, weights, shifts[::coarse], params, trust, bounds)
     else:
         best = (np.full(P, np.inf), np.zeros(P), np.zeros(P), np.zeros(P))  # score, a, b, c
         for a in shifts[::coarse]:
             best = _better(best, at(a))
     if coarse > 1:
         step = shifts[1] - shifts[0]
-        centre = best[1].copy()
-        for k in range(1 - coarse, coarse):
-            if k:
-                best = _better(best, at(np.clip(centre + k * step, shifts[0], shifts[-1])))
+        around = [np.clip(best[1] + k * step, shifts[0], shifts[-1]) for k in range(1 - coarse, coarse) if k]
+        if compiled:
+            best = _compiled_fits(rendered, image, columns, cx, weights, np.column_stack(around), params, trust,
+                                  bounds, best)
+        else:
+            for a in around:
+                best = _better(best, at(a))
     share = None
     if agreement:  # at each pose's best shift: the same fit, its agreement (indexed otherwise: to the last bits)
         share = _aligned_at(rendered, image, columns, cx, weights, best[1], params, trust, bounds)[1]
@@ -259,100 +264,36 @@ def _aligned_at(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx
         c.astype(np.float64)
 
 
-def _coarse_fits(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx: float, weights: np.ndarray,
-                 shifts: np.ndarray, params: ScoreParams, trust: np.ndarray | None, bounds: tuple | None) -> tuple:
-    """The best of :func:`_aligned_at` over one shift at a time (``shifts`` (S,) px) for each pose, the
-    first of equals: (score, a, b, c), each (P,); compiled (numba), 10x faster than numpy's passes.
-    It does numpy's float32 and float64 operations in their order, and sums each row from its first
-    column on, as numpy sums the rows of the column-major arrays that indexing gives; so in blocks of
-    :func:`align_skylines` (2**16 elements or more) its values are numpy's to the bit (tested; numpy
-    lays smaller arrays out otherwise now and then, and sums them in another order)."""
+def _compiled_fits(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx: float, weights: np.ndarray,
+                   shifts: np.ndarray, params: ScoreParams, trust: np.ndarray | None, bounds: tuple | None,
+                   best: tuple | None = None) -> tuple:
+    """:func:`_aligned_at` at each of ``shifts`` in turn, the best kept per pose (the first of equals), from
+    ``best`` ((score, a, b, c), each (P,); None: none yet): the new best. ``shifts`` (S,) px are tried on
+    every pose, (P, S) one row per pose. Compiled (numba), 6-10x faster than numpy's passes.
+
+    It does numpy's float32 and float64 operations in their order, and sums as numpy sums the arrays
+    :func:`_aligned_at` makes: one shift for all indexes the columns into column-major arrays, whose rows
+    numpy sums from the first column on; a shift per pose gathers row-major arrays, which numpy sums pairwise.
+    So in blocks of :func:`align_skylines` (2**16 elements or more) its values are numpy's to the bit
+    (tested); numpy lays smaller arrays out otherwise now and then."""
     P, n = rendered.shape
-    u = columns + 0.5
-    step = u[1] - u[0] if n > 1 else 1.0
-    pos = (u[None, :] - shifts[:, None] - u[0]) / step
-    i0 = np.clip(np.floor(pos).astype(np.int64), 0, n - 1)
-    t = np.clip(pos - i0, 0.0, 1.0).astype(np.float32)
+    shifts = np.asarray(shifts, np.float64)
+    per_pose = shifts.ndim == 2
+    u = (columns + 0.5).astype(np.float64)
     low, high = bounds if bounds is not None else (np.zeros(P, np.float32),) * 2
-    out = (np.empty(P), np.empty(P, np.int64), np.empty(P, np.float32), np.empty(P, np.float32))
-    _coarse_kernel()(np.ascontiguousarray(rendered, np.float32),
-                     np.zeros((0, n), np.float32) if trust is None else np.ascontiguousarray(trust, np.float32),
-                     image.astype(np.float32), np.asarray(image, np.float64), weights.astype(np.float32),
-                     np.asarray(weights, np.float64), (u - cx).astype(np.float32), i0, np.minimum(i0 + 1, n - 1), t,
-                     (1 - t).astype(np.float32), (pos < 0) | (pos > n - 1), low, high, bounds is not None,
-                     float(params.cap_px), float(params.occluder_weight), float(params.untrusted_px),
-                     max(float(np.sum(weights)), 1e-9), *out)
-    score, index, b, c = out
-    return score, shifts[index], b.astype(np.float64), c.astype(np.float64)
+    if best is None:
+        best = (np.full(P, np.inf), np.zeros(P), np.zeros(P), np.zeros(P))
+    score, a = best[0].copy(), best[1].copy()
+    b, c = best[2].astype(np.float32), best[3].astype(np.float32)
+    from .alignment_kernel import best_fits  # numba: imported and compiled (or loaded) on first use
 
-
-@functools.cache
-def _coarse_kernel():
-    """:func:`_coarse_fits`' kernel, compiled on first use (numba, cached on disk), releasing the GIL
-    so that blocks run on all cores."""
-    import numba
-
-    f32 = np.float32
-
-    @numba.njit(nogil=True, cache=True)
-    def kernel(rendered, trust, image32, image, weights32, weights, x, i0, i1, t, one_minus_t, outside,
-               low, high, bounded, cap, occluder_weight, untrusted, total, score, index, b_out, c_out):
-        P, n = rendered.shape
-        with_trust = trust.shape[0] > 0
-        tiny, three, one, untrusted32 = f32(1e-9), f32(3.0), f32(1.0), f32(untrusted)
-        moved = np.empty(n, np.float32)
-        trusted = np.empty(n, np.float32)
-        d0 = np.empty(n, np.float32)
-        w = np.empty(n, np.float32)
-        for p in range(P):
-            best = np.inf
-            for s in range(i0.shape[0]):
-                for j in range(n):  # the rendered skyline moved by the shift, its residual and weight
-                    m = rendered[p, i0[s, j]] * one_minus_t[s, j] + rendered[p, i1[s, j]] * t[s, j]
-                    moved[j] = np.float32(np.nan) if outside[s, j] else m
-                    trusted[j] = trust[p, i0[s, j]] * one_minus_t[s, j] + trust[p, i1[s, j]] * t[s, j] \
-                        if with_trust else one
-                    d = image32[j] - moved[j]
-                    finite = np.isfinite(d)
-                    w[j] = (weights32[j] * trusted[j] if with_trust else weights32[j]) if finite else f32(0.0)
-                    d0[j] = d if finite else f32(0.0)
-                b = c = f32(0.0)
-                for fit in range(2):  # offset b + slope c by least squares, then without the columns beyond 3 px
-                    wx = w[0] * x[0]
-                    sw, sx, sxx, sy, sxy = w[0], wx, wx * x[0], w[0] * d0[0], wx * d0[0]
-                    for j in range(1, n):
-                        wx = w[j] * x[j]
-                        sw += w[j]
-                        sx += wx
-                        sxx += wx * x[j]
-                        sy += w[j] * d0[j]
-                        sxy += wx * d0[j]
-                    c = (sw * sxy - sx * sy) / max(sw * sxx - sx * sx, tiny)
-                    if bounded:
-                        c = min(max(c, low[p]), high[p])
-                    b = (sy - c * sx) / max(sw, tiny)
-                    if fit == 0:
-                        for j in range(n):
-                            if not abs(d0[j] - b - c * x[j]) <= three:
-                                w[j] = f32(0.0)
-                total_cost = 0.0
-                for j in range(n):  # score_skylines
-                    r = moved[j] + b + c * x[j]
-                    e = np.float64(r) - image[j]
-                    if np.isnan(r) or np.isnan(image[j]):
-                        e = 0.0 if np.isnan(r) and np.isnan(image[j]) else -cap
-                    cost = min(abs(e), cap)
-                    if e >= 0:
-                        cost = cost * occluder_weight
-                    if with_trust:
-                        cost = np.float64(trusted[j]) * cost + np.float64((one - trusted[j]) * untrusted32)
-                    total_cost = cost * weights[j] if j == 0 else total_cost + cost * weights[j]
-                if total_cost / total < best:
-                    best = total_cost / total
-                    index[p], b_out[p], c_out[p] = s, b, c
-            score[p] = best
-
-    return kernel
+    best_fits(np.ascontiguousarray(rendered, np.float32),
+                   np.zeros((0, n), np.float32) if trust is None else np.ascontiguousarray(trust, np.float32),
+                   image.astype(np.float32), np.asarray(image, np.float64), weights.astype(np.float32),
+                   np.asarray(weights, np.float64), u, (u - cx).astype(np.float32), np.atleast_2d(shifts), per_pose,
+                   low, high, bounds is not None, float(params.cap_px), float(params.occluder_weight),
+                   float(params.untrusted_px), max(float(np.sum(weights)), 1e-9), score, a, b, c)
+    return score, a, b.astype(np.float64), c.astype(np.float64)
 
 
 def verify_poses(terrain: Terrain, poses: np.ndarray, intrinsics: Intrinsics, image_skyline: np.ndarray,
