@@ -163,8 +163,9 @@ def _align_rows(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray, cx
                 shifts: np.ndarray, params: ScoreParams, trust: np.ndarray | None, coarse: int,
                 swing: np.ndarray, agreement: bool = True, compiled: bool = False) -> tuple:
     """:func:`align_skylines` of some poses: ``rendered`` (P, n) float32, ``trust`` (P, n) float32
-    or None, ``swing`` (P,) deg. With ``compiled`` the every-``coarse``-th shifts are tried by
-    :func:`_compiled_fits` (a block of :func:`align_skylines`, where it gives numpy's values)."""
+    or None, ``swing`` (P,) deg. With ``compiled`` the shifts (every ``coarse``-th, then those around each
+    pose's best) are tried by :func:`_compiled_fits` (a block of :func:`align_skylines`, where it gives
+    numpy's values), else by numpy's passes (:func:`_aligned_at`)."""
     shifts = np.asarray(shifts, np.float64)
     P = len(rendered)
     bounds = slope_bounds(swing, params.max_swing_deg)
