@@ -15,6 +15,7 @@ $(STAMP): pyproject.toml scripts/install-system-deps.sh
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e '.[dev]'
+	$(BIN)/python -m skyrender.localizer.alignment_kernel  # the alignment kernel compiled into numba's cache once
 	touch $(STAMP)
 
 demo: install

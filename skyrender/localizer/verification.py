@@ -277,6 +277,8 @@ def _compiled_fits(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray,
     numpy sums from the first column on; a shift per pose gathers row-major arrays, which numpy sums pairwise.
     So in blocks of :func:`align_skylines` (2**16 elements or more) its values are numpy's to the bit
     (tested); numpy lays smaller arrays out otherwise now and then."""
+    from .alignment_kernel import best_fits  # numba: imported, and compiled or loaded from its cache, on first use
+
     P, n = rendered.shape
     shifts = np.asarray(shifts, np.float64)
     per_pose = shifts.ndim == 2
@@ -286,14 +288,15 @@ def _compiled_fits(rendered: np.ndarray, image: np.ndarray, columns: np.ndarray,
         best = (np.full(P, np.inf), np.zeros(P), np.zeros(P), np.zeros(P))
     score, a = best[0].copy(), best[1].copy()
     b, c = best[2].astype(np.float32), best[3].astype(np.float32)
-    from .alignment_kernel import best_fits  # numba: imported and compiled (or loaded) on first use
-
+    # contiguous arrays throughout: the argument types alignment_kernel.compile_now compiles for
     best_fits(np.ascontiguousarray(rendered, np.float32),
-                   np.zeros((0, n), np.float32) if trust is None else np.ascontiguousarray(trust, np.float32),
-                   image.astype(np.float32), np.asarray(image, np.float64), weights.astype(np.float32),
-                   np.asarray(weights, np.float64), u, (u - cx).astype(np.float32), np.atleast_2d(shifts), per_pose,
-                   low, high, bounds is not None, float(params.cap_px), float(params.occluder_weight),
-                   float(params.untrusted_px), max(float(np.sum(weights)), 1e-9), score, a, b, c)
+              np.zeros((0, n), np.float32) if trust is None else np.ascontiguousarray(trust, np.float32),
+              np.ascontiguousarray(image, np.float32), np.ascontiguousarray(image, np.float64),
+              np.ascontiguousarray(weights, np.float32), np.ascontiguousarray(weights, np.float64), u,
+              (u - cx).astype(np.float32), np.ascontiguousarray(np.atleast_2d(shifts)), per_pose,
+              np.ascontiguousarray(low), np.ascontiguousarray(high), bounds is not None, float(params.cap_px),
+              float(params.occluder_weight), float(params.untrusted_px), max(float(np.sum(weights)), 1e-9),
+              score, a, b, c)
     return score, a, b.astype(np.float64), c.astype(np.float64)
 
 
