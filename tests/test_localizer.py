@@ -1346,6 +1346,26 @@ def test_the_compiled_alignment_sums_and_fits_as_numpy_does_to_the_bit():
         assert np.array_equal(numpy_values, kernel_values)
 
 
+def test_the_kernel_compiled_at_install_is_the_one_the_alignment_calls():
+    """``make install`` compiles the alignment's kernel (:func:`alignment_kernel.compile_now`) for the argument types
+    the verification passes it, so no localization compiles it again (~4 s): a block with coarse (strided) and
+    per-pose shifts, with and without trust and a roll bound, adds no signature."""
+    from skyrender.localizer import verification
+    from skyrender.localizer.alignment_kernel import best_fits, compile_now
+
+    compile_now()
+    compiled = len(best_fits.signatures)
+    rng = np.random.default_rng(2)
+    columns = np.arange(1, 640, 2)
+    image = rng.normal(200.0, 5.0, len(columns))
+    rendered = image[None, :] + rng.normal(0.0, 3.0, (700, len(columns)))
+    for trust, roll in ((None, math.inf), (rng.uniform(0, 1, rendered.shape), 8.0)):
+        align_skylines(rendered, image, columns, 320.0, np.ones(len(columns)), trust=trust,
+                       params=ScoreParams(max_swing_deg=roll), swing=np.zeros(len(rendered)), agreement=False)
+    assert len(rendered) * len(columns) > verification.MIN_BLOCK_ELEMENTS  # in blocks: the kernel ran
+    assert len(best_fits.signatures) == compiled
+
+
 @pytest.mark.parametrize("terms, roll", [(2, math.inf), (3, math.inf), (2, 8.0)])
 def test_horizon_costs_in_blocks_of_centres_are_the_whole_arrays_to_the_bit(monkeypatch, terms, roll):
     """:func:`horizon_costs` works through the centres in blocks (on all cores): any block size
