@@ -86,6 +86,16 @@ def row_sum(values, in_pairs, zero):
 @numba.njit(nogil=True, cache=True)
 def best_fits(rendered, trust, image32, image, weights32, weights, u, x, shifts, per_pose, low, high, bounded,
            cap, occluder_weight, untrusted, total, score, a_out, b_out, c_out):
+    """For each pose p (row of ``rendered`` (P, n) float32, skylines sampled at image columns u - 0.5 (n,)), each
+    shift of ``shifts`` (1, S) for all or (P, S) per pose (``per_pose``) px in turn: the rendered skyline moved
+    right by it, offset b + slope c (about the image centre: ``x`` = u - cx, float32) fitted to the photo's
+    skyline ``image`` (n,) by weighted least squares twice (the second time without the columns beyond 3 px), the
+    slope within [``low``, ``high``] (P,) when ``bounded``; then the robust score of
+    :func:`~skyrender.localizer.verification.score_skylines` (``cap``, ``occluder_weight``, ``untrusted``; column
+    weights ``weights`` (n,) summing to ``total``; ``trust`` (P, n) float32, or (0, n) for none). Where a shift scores
+    lower than ``score[p]``, it and its fit replace ``score``, ``a_out``, ``b_out``, ``c_out`` (P,) in place. Every
+    operation is numpy's in :func:`~skyrender.localizer.verification._aligned_at`, in its order and precision; the
+    sums pairwise with ``per_pose``, else from the first column on (numpy's summation of the arrays it makes)."""
     P, n = rendered.shape
     with_trust = trust.shape[0] > 0
     tiny, three, one, untrusted32 = f32(1e-9), f32(3.0), f32(1.0), f32(untrusted)
