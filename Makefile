@@ -15,7 +15,9 @@ $(STAMP): pyproject.toml scripts/install-system-deps.sh
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e '.[dev]'
-	$(BIN)/python -m skyrender.localizer.alignment_kernel  # the alignment kernel compiled into numba's cache once
+	# the compiled kernels (the alignment, the boundary search) into numba's cache, once
+	$(BIN)/python -m skyrender.localizer.alignment_kernel
+	$(BIN)/python -m skyrender.features.boundary_kernel
 	touch $(STAMP)
 
 demo: install

@@ -666,3 +666,65 @@ def test_select_runs_the_mixtures_only_where_the_hybrid_doubts(builtin_view, mon
     # the rule itself: strictly more than the share
     doubt = extraction.ExtractedSkyline(np.zeros(100), np.r_[np.full(2, 0.4), np.full(98, 0.9)], np.zeros((4, 100)))
     assert not extraction.hybrid_in_doubt(doubt, 0.02) and extraction.hybrid_in_doubt(doubt, 0.01)
+
+
+def _boundary_dp_in_numpy(cost: np.ndarray, jump_cost: float, jump_cap: float) -> np.ndarray:
+    """The boundary search as numpy passes column by column (the extractor's until 2026-12-06): the reference the
+    compiled one must match to the bit."""
+    n, W = cost.shape
+    idx = np.arange(n)
+    slope = jump_cost * idx
+    slope_reversed = slope[::-1].copy()
+    columns = np.ascontiguousarray(cost.T, dtype=np.float64)
+    back = np.zeros((W, n), dtype=np.int32)
+    d = columns[0].copy()
+    for j in range(1, W):
+        h = d - slope
+        m1 = np.minimum.accumulate(h)
+        a1 = np.maximum.accumulate(np.where(h <= m1, idx, 0))
+        g1 = m1 + slope
+        h2 = d[::-1] + slope_reversed
+        m2 = np.minimum.accumulate(h2)
+        a2 = np.maximum.accumulate(np.where(h2 <= m2, idx, 0))
+        g2 = m2[::-1] - slope
+        a2 = n - 1 - a2[::-1]
+        g = np.minimum(g1, g2)
+        arg = np.where(g1 <= g2, a1, a2)
+        best = int(np.argmin(d))
+        far = d[best] + jump_cap
+        np.copyto(arg, best, where=far < g)
+        back[j] = arg
+        d = np.minimum(g, far)
+        d += columns[j]
+    path = np.empty(W, dtype=np.int64)
+    path[-1] = int(np.argmin(d))
+    for j in range(W - 1, 0, -1):
+        path[j - 1] = back[j, path[j]]
+    return path
+
+
+def test_the_compiled_boundary_search_finds_numpys_path_and_the_cheapest_one():
+    """:func:`boundary_dp` (compiled) gives the numpy recursion's path to the bit on random costs, ties included, and
+    that path costs no more than any other: checked against every path of a small array by brute force."""
+    import itertools
+
+    from skyrender.features.skyline import boundary_dp
+
+    rng = np.random.default_rng(5)
+    for trial in range(200):
+        n, W = int(rng.integers(2, 50)), int(rng.integers(1, 60))
+        cost = rng.normal(size=(n, W))
+        if trial % 2:
+            cost = np.round(cost, 1)  # many equal costs: the ties break as numpy's
+        jump_cost, jump_cap = float(rng.uniform(0.0, 2.0)), float(rng.uniform(0.0, 5.0))
+        assert np.array_equal(boundary_dp(cost, jump_cost, jump_cap), _boundary_dp_in_numpy(cost, jump_cost, jump_cap))
+
+    def path_cost(cost, path, jump_cost, jump_cap):
+        jumps = np.minimum(jump_cost * np.abs(np.diff(path)), jump_cap)
+        return cost[path, np.arange(len(path))].sum() + jumps.sum()
+
+    for _ in range(20):
+        cost = rng.normal(size=(4, 5))
+        found = path_cost(cost, boundary_dp(cost, 0.7, 1.5), 0.7, 1.5)
+        cheapest = min(path_cost(cost, np.array(p), 0.7, 1.5) for p in itertools.product(range(4), repeat=5))
+        assert found <= cheapest + 1e-9
