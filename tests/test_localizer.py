@@ -1284,7 +1284,7 @@ def test_skylines_aligned_in_blocks_of_poses_are_the_whole_arrays_to_the_bit(mon
     """:func:`align_skylines` works through many poses in blocks (on all cores), the last one
     padded: any block size gives the scores, agreements and fitted shifts, offsets and slopes
     of one block holding every pose, to the bit (NaN columns, trust and a roll bound included).
-    The blocks try the coarse shifts in the compiled kernel, the one block in numpy's passes: the
+    The blocks try their shifts in the compiled kernel, the one block in numpy's passes: the
     kernel gives numpy's values to the bit; without the agreement, the same scores and fits."""
     from skyrender.localizer import verification
 

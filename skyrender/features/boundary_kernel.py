@@ -31,14 +31,14 @@ def boundary_path(columns, slope, jump_cap):
     g1, g2 = np.empty(n), np.empty(n)
     a1, a2 = np.empty(n, np.int64), np.empty(n, np.int64)
     for j in range(1, W):
-        m, a = d[0] - slope[0], 0
+        m, a = 0.0, 0  # m set by the first row
         for b in range(n):  # from above
             h = d[b] - slope[b]
             m = h if b == 0 else _minimum(m, h)
             if h <= m:
                 a = b
             g1[b], a1[b] = m + slope[b], a
-        m, a = d[n - 1] + slope[n - 1], 0
+        m, a = 0.0, 0
         for k in range(n):  # from below, the bottom row first
             b = n - 1 - k
             h = d[b] + slope[b]
