@@ -347,6 +347,19 @@ def margin_of(row: dict, runner_up_m: float = 1000.0) -> float:
     return 1.0 - best / runner if runner else 1.0
 
 
+def answer_xy(row: dict) -> np.ndarray:
+    """(2,) the position (m) of the row's answer, withheld or not: its best refined pose (:func:`refined_of`);
+    NaN without one."""
+    poses = refined_of(row)
+    return poses[int(np.argmin(poses[:, 7])), :2] if len(poses) else np.full(2, np.nan)
+
+
+def apart_m(row: dict, other: dict) -> float:
+    """How far apart (m) two rows' answers are (:func:`answer_xy`): a photo's fov-given answer and the one a search
+    with the fov unknown gives it (the second opinion, ``LocalizeParams.second_opinion_from``); NaN without both."""
+    return float(np.hypot(*(answer_xy(row) - answer_xy(other))))
+
+
 def log_best_of(row: dict) -> float:
     """ln of the row's best refined score, rescaled to the reference width (:func:`pipeline.log_score`;
     the row's ``width``, else 1024 px: every CH1 photo); the best as :func:`margin_of` takes it; NaN

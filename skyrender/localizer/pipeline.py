@@ -93,6 +93,11 @@ PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN = float(_FIT.get("min_confidence_fov_unknown", 
 #: The photo confidence's runner-up is the best refined pose farther than this (m) from the
 #: answer, chosen with the logistic on the training photos (``localize_fit``).
 PHOTO_RUNNER_UP_M = float(_FIT.get("runner_up_m", 1000.0))
+#: With the fov given, an answer withheld with a confidence of at least this is searched for again with the fov unknown,
+#: and where the two searches' best places lie within 1 km of each other its confidence's logit gains the second
+#: (:func:`_second_opinion`; fitted by ``localize_fit``; inf: no second opinion).
+PHOTO_SECOND_OPINION_FROM = float((_FIT.get("second_opinion") or {}).get("from", math.inf))
+PHOTO_SECOND_OPINION_GAIN = float((_FIT.get("second_opinion") or {}).get("gain", 0.0))
 #: Real photographs stand nearly upright (hand-held, EXIF orientation applied): the camera roll
 #: the photo preset's alignment and least squares may fit (deg; CH1 training oracle fits: -5.4..3.0).
 PHOTO_MAX_SWING_DEG = 8.0
@@ -154,6 +159,13 @@ class LocalizeParams:
     stall_gain: float = 0.0
     min_confidence: float = 0.7  # abstain below this (wrong poses scored 0.51-0.59 on test views)
     min_confidence_fov_unknown: float | None = None  # ... when the fov is unknown (None: min_confidence)
+    # a second opinion (:func:`_second_opinion`): with the fov given, an answer about to be withheld with a
+    # confidence of at least second_opinion_from (inf: never) is searched for again with the fov unknown, and
+    # where the two searches' best places lie within second_opinion_m (m) of each other its confidence's logit
+    # gains second_opinion_gain (fitted on the CH1 training side: experiments/ch1/mode-agreement/)
+    second_opinion_from: float = math.inf
+    second_opinion_m: float = 1000.0
+    second_opinion_gain: float = 0.0
     same_pose_m: float = 150.0  # candidates closer than this (and same heading) are one
     runner_up_m: float | None = None  # confidence: the runner-up is the best refined pose this far away (None: distinct)
     confidence_model: str = "agreement"  # "agreement" (renders) or "margin": P(right) from the runner-up's margin
@@ -261,6 +273,8 @@ class LocalizeParams:
                    give_up_sweep_px=math.inf, same_pose_m=300.0, runner_up_m=PHOTO_RUNNER_UP_M, confidence_model="margin",
                    margin_logit=PHOTO_MARGIN_LOGIT, min_confidence=PHOTO_MIN_CONFIDENCE,
                    min_confidence_fov_unknown=PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN,
+                   second_opinion_from=PHOTO_SECOND_OPINION_FROM,
+                   second_opinion_gain=PHOTO_SECOND_OPINION_GAIN,
                    score=ScoreParams(max_swing_deg=PHOTO_MAX_SWING_DEG),
                    # every far-horizon pose moved to the best of a 7 x 7 grid +-300 m around it (renders on every 32nd
                    # column) before the best are refined: a pose a few hundred metres from a camera under ridges
@@ -331,6 +345,9 @@ class LocalizeStats:
     refined_poses: list = field(default_factory=list)
     refined_slopes: list = field(default_factory=list)  # the ground's slope (deg) under each refined pose
     searched_width: int | None = None  # the skyline's columns the search ran on (LocalizeParams.search_width)
+    # the second opinion's best place, when one was asked (:func:`_second_opinion`): its pose as refined_poses'
+    # rows are, the distance (m) from the answer's and the second search's seconds
+    second_opinion: dict | None = None
 
     def add_time(self, stage: str, seconds: float) -> None:
         self.seconds[stage] = self.seconds.get(stage, 0.0) + seconds
@@ -356,7 +373,7 @@ class LocalizeStats:
                 "seconds": {k: round(v, 4) for k, v in self.seconds.items()},
                 "peak_mb": {k: round(v, 1) for k, v in self.peak_mb.items()}, "rounds": list(self.rounds),
                 "refined_poses": [list(r) for r in self.refined_poses], "refined_slopes": list(self.refined_slopes),
-                "searched_width": self.searched_width,
+                "searched_width": self.searched_width, "second_opinion": self.second_opinion,
                 "hypotheses_per_second": self.evaluated / solve if solve > 0 else 0.0}
 
 
@@ -643,18 +660,36 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     with stats.timed("image_features"):
         photo_sky, photo_weights, photo_W, photo_H = _image_skyline(image, skyline, params.skyline_params(),
                                                                     params.confidence_power)
+    with stats.timed("terrain"):
+        terrain = terrain if terrain is not None else Terrain(model.dem, curvature=curvature)
+    photo = (photo_sky, photo_weights, photo_W, photo_H)
+    search, accepted, result = _search_and_decide(photo, model, terrain, height, fov, prior, params, stats, curvature,
+                                                  solver or solve_poses, t_start)
+    if _wants_second_opinion(search, result):
+        with stats.timed("second_opinion"):
+            result = _second_opinion(search, accepted, result, photo, prior, t_start)
+    if search.width != photo_W:
+        result = _in_photo_pixels(result, terrain, photo_sky, photo_W, photo_H, search.width)
+    return result
+
+
+def _search_and_decide(photo: tuple, model: Model, terrain: Terrain, height: float, fov: float | None, prior,
+                       params: "LocalizeParams", stats: LocalizeStats, curvature: bool, solver,
+                       t_start: float) -> tuple["_Search", "_Candidate | None", LocalizationResult]:
+    """Stages 3-4d for a photo's skyline ``photo`` = (skyline, column weights, W, H): the search, its
+    refinements and its answer or abstention (in the searched pixels, :func:`reduce_skyline`)."""
+    photo_sky, photo_weights, photo_W, photo_H = photo
+    with stats.timed("image_features"):
         sky, weights, W, H = photo_sky, photo_weights, photo_W, photo_H
         if params.search_width is not None and photo_W > params.search_width:
             sky, weights, W, H = reduce_skyline(photo_sky, photo_weights, photo_W, photo_H, params.search_width)
         stats.searched_width = W
         peaks = image_peaks(sky, params)
-    with stats.timed("terrain"):
-        terrain = terrain if terrain is not None else Terrain(model.dem, curvature=curvature)
     peak_uv = np.array([[p.u, p.v] for p in peaks]).reshape(-1, 2)
     fovs = (float(fov),) if fov is not None else tuple(params.fov_candidates)
     in_view = model.features_for_prior(**prior) if prior else None
     search = _Search(model, terrain, height, fov, fovs, sky, weights, W, H, peak_uv, segments_in_sky(peak_uv, sky), in_view,
-                     params, stats, curvature, solver=solver or solve_poses)
+                     params, stats, curvature, solver=solver)
     with stats.timed("hypotheses"):
         hyps = _three_point_hypotheses(search, np.array([p.size for p in peaks]))
     if params.use_horizons and len(model.horizons):
@@ -670,9 +705,51 @@ def localize(image, model: Model, height: float, fov: float | None = None, prior
     result = _decide(search, accepted, t_start)
     if not result.localized:
         result = _before_abstaining(search, accepted, t_start, result)
-    if W != photo_W:
-        result = _in_photo_pixels(result, terrain, photo_sky, photo_W, photo_H, W)
-    return result
+    return search, accepted, result
+
+
+def _wants_second_opinion(search: "_Search", result: LocalizationResult) -> bool:
+    """Whether a fov-given search about to abstain asks a second search, with the fov unknown
+    (:func:`_second_opinion`): its confidence fell short, but not below ``second_opinion_from``."""
+    return (search.fov is not None and not result.localized and bool(search.candidates)
+            and result.confidence >= search.params.second_opinion_from)
+
+
+def _second_opinion(search: "_Search", accepted: "_Candidate | None", result: LocalizationResult, photo: tuple,
+                    prior, t_start: float) -> LocalizationResult:
+    """Stage 4e: the photo searched again with the fov unknown (same skyline, terrain and parameters). A look-alike
+    fits the skyline at the given focal length; at a focal length of its own the search finds another. So where both
+    searches' best places lie within ``second_opinion_m`` of each other, the logit of the fov-given answer's
+    confidence gains ``second_opinion_gain`` (:func:`agreed_confidence`; fitted on the training photos by
+    ``localize_fit``), and the answer is given if that reaches the threshold; otherwise the abstention stands.
+    The second search's best place and the distance are kept in the stats."""
+    params, stats = search.params, search.stats
+    best, _ = _answer(search, accepted)
+    other = LocalizeStats()
+    second, second_accepted, _ = _search_and_decide(photo, search.model, search.terrain, search.height, None, prior,
+                                                    params, other, search.curvature, search.solver, time.perf_counter())
+    second_best, _ = _answer(second, second_accepted)
+    if best is None or second_best is None:
+        return result
+    apart = float(np.hypot(*(np.asarray(best.refined.pose[:2]) - np.asarray(second_best.refined.pose[:2]))))
+    stats.second_opinion = {"pose": [float(v) for v in (*second_best.refined.pose, second_best.refined.f_px,
+                                                         second_best.refined.score)],
+                            "apart_m": apart, "seconds": round(sum(other.seconds.values()), 4)}
+    if apart > params.second_opinion_m:
+        return result
+    confidence = agreed_confidence(result.confidence, params.second_opinion_gain)
+    if confidence < params.abstain_below(False):
+        return replace(result, confidence=confidence)
+    return _localized(search, best, confidence, t_start)
+
+
+def agreed_confidence(confidence: float, gain: float) -> float:
+    """A confidence (a probability) whose logit gains ``gain``: an answer that a second search with the fov
+    unknown agrees with (:func:`_second_opinion`). 0 and 1 stay."""
+    if confidence <= 0.0 or confidence >= 1.0:
+        return float(confidence)
+    z = math.log(confidence / (1.0 - confidence)) + gain
+    return 1.0 / (1.0 + math.exp(-z)) if z >= 0 else math.exp(z) / (1.0 + math.exp(z))  # no overflow either way
 
 
 def reduce_skyline(sky: np.ndarray, weights: np.ndarray, W: int, H: int,
@@ -991,40 +1068,54 @@ def _round_record(search: _Search, accepted: bool) -> dict:
 def _decide(search: _Search, accepted: _Candidate | None, t_start: float) -> LocalizationResult:
     """Stage 4c: the best refined pose (the accepted one if any) with its confidence
     against the runner-up, or an abstention below ``min_confidence``."""
-    params, stats, model = search.params, search.stats, search.model
+    params, stats = search.params, search.stats
+    best, confidence = _answer(search, accepted)
+    if best is None or confidence < params.abstain_below(search.fov is None):
+        # an abstention keeps the confidence it fell short with (0 when nothing was refined)
+        return LocalizationResult("abstained", None, None, confidence, time.perf_counter() - t_start, stats.evaluated,
+                                  stats, search.intrinsics(search.fovs[0]), search.sky)
+    return _localized(search, best, confidence, t_start)
+
+
+def _answer(search: _Search, accepted: _Candidate | None) -> tuple[_Candidate | None, float]:
+    """The answer a search would give, abstaining or not: the best refined candidate (the accepted
+    one if any; among poses on standable ground, ``max_answer_slope_deg``) and its confidence against
+    the runner-up (0 when nothing was refined); the best and runner-up scores go to the stats."""
+    params, stats = search.params, search.stats
     W, H = search.width, search.img_height
     done = sorted([c for c in search.candidates if c.refined is not None], key=lambda c: c.refined.score)
     if accepted is None and done:
         keep = standable_mask([c.ground_slope for c in done], params.max_answer_slope_deg)
         done = [c for c, k in zip(done, keep) if k]
     best = accepted or (done[0] if done else None)
-    confidence = 0.0
-    if best is not None:
-        if params.runner_up_m is None:
-            others = [c for c in done if c is not best and _distinct([best.refined.pose], c.refined.pose,
-                                                                     params.same_pose_m)]
-        else:
-            i = runner_up_index([c.refined.pose[:2] for c in done], [c.refined.score for c in done],
-                                [c is best for c in done].index(True), params.runner_up_m)
-            others = [] if i is None else [done[i]]
-        runner_up = others[0].refined if others else None
-        stats.best_score, stats.runner_up_score = best.refined.score, runner_up.score if runner_up else None
-        if params.confidence_model == "margin":
-            part = 0.0
-            if uses_part_margin(params.margin_logit) and best is not accepted:
-                refined = np.array([(*c.refined.pose, c.refined.f_px, c.refined.score) for c in done])
-                with stats.timed("part_margin"):
-                    part = answer_part_margin(search.terrain, refined, search.sky, search.weights, H,
-                                              params.runner_up_m or params.same_pose_m, params.score)
-                stats.part_margin = part
-            confidence = margin_confidence(best.refined.score, runner_up.score if runner_up else np.inf,
-                                           params.margin_logit, W, part)
-        else:
-            confidence = confidence_of(best.refined, runner_up)
-    if best is None or confidence < params.abstain_below(search.fov is None):
-        # an abstention keeps the confidence it fell short with (0 when nothing was refined)
-        return LocalizationResult("abstained", None, None, confidence, time.perf_counter() - t_start, stats.evaluated,
-                                  stats, search.intrinsics(search.fovs[0]), search.sky)
+    if best is None:
+        return None, 0.0
+    if params.runner_up_m is None:
+        others = [c for c in done if c is not best and _distinct([best.refined.pose], c.refined.pose,
+                                                                 params.same_pose_m)]
+    else:
+        i = runner_up_index([c.refined.pose[:2] for c in done], [c.refined.score for c in done],
+                            [c is best for c in done].index(True), params.runner_up_m)
+        others = [] if i is None else [done[i]]
+    runner_up = others[0].refined if others else None
+    stats.best_score, stats.runner_up_score = best.refined.score, runner_up.score if runner_up else None
+    if params.confidence_model != "margin":
+        return best, confidence_of(best.refined, runner_up)
+    part = 0.0
+    if uses_part_margin(params.margin_logit) and best is not accepted:
+        refined = np.array([(*c.refined.pose, c.refined.f_px, c.refined.score) for c in done])
+        with stats.timed("part_margin"):
+            part = answer_part_margin(search.terrain, refined, search.sky, search.weights, H,
+                                      params.runner_up_m or params.same_pose_m, params.score)
+        stats.part_margin = part
+    return best, margin_confidence(best.refined.score, runner_up.score if runner_up else np.inf,
+                                   params.margin_logit, W, part)
+
+
+def _localized(search: _Search, best: _Candidate, confidence: float, t_start: float) -> LocalizationResult:
+    """The answer ``best`` given with ``confidence``: its pose, fov, the photo's and its rendered skyline."""
+    model = search.model
+    W, H = search.width, search.img_height
     r = best.refined
     k_best = Intrinsics(W, H, r.f_px, W / 2.0, H / 2.0)
     rendered = render_skylines(search.terrain, r.pose, k_best)
@@ -1033,7 +1124,7 @@ def _decide(search: _Search, accepted: _Candidate | None, t_start: float) -> Loc
         lon, lat = model.dem.to_lonlat(r.pose[0], r.pose[1])
         lonlat = (float(lon), float(lat))
     return LocalizationResult("localized", r.pose, k_best.fov, confidence, time.perf_counter() - t_start,
-                              stats.evaluated, stats, k_best, search.sky, rendered, model.dem.crs, lonlat)
+                              search.stats.evaluated, search.stats, k_best, search.sky, rendered, model.dem.crs, lonlat)
 
 
 def _best_of(score: np.ndarray) -> float:

@@ -43,7 +43,16 @@ from dataclasses import replace
 import numpy as np
 from scipy.optimize import minimize
 
-from ..benchmarks.real_localize import log_best_of, logit_text, margin_of, model_overrides, places_of, run, with_part_margins
+from ..benchmarks.real_localize import (
+    apart_m,
+    log_best_of,
+    logit_text,
+    margin_of,
+    model_overrides,
+    places_of,
+    run,
+    with_part_margins,
+)
 from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
 from ..evaluate import git_commit
 from ..localizer import LocalizeParams
@@ -167,6 +176,82 @@ def fit_confidence(rows: list[dict], choices_m=RUNNER_UP_CHOICES_M, score_term: 
                      for r, m, lb in zip(rows, fit["margin"], log_best)]}
 
 
+#: With the fov given, an answer withheld with a confidence of at least this asks the second opinion (a search with
+#: the fov unknown; ``LocalizeParams.second_opinion_from``): an answer more likely right than wrong by its own margin.
+#: Below it no training answer that the second opinion agreed with was right where withheld... and the second search
+#: costs a fov-unknown search's time (experiments/ch1/mode-agreement/).
+SECOND_OPINION_FROM = 0.5
+#: The two searches agree where their best places lie within this (m) of each other.
+SECOND_OPINION_M = 1000.0
+
+
+def agreement_gain(logit_z: np.ndarray, agree: np.ndarray, right: np.ndarray, ridge: float = 1e-3) -> float:
+    """The gain g maximising the likelihood of ``right`` under logistic(z + g [agree]), the logits ``logit_z`` of the
+    margin fit held: what the second opinion's agreement adds to an answer's logit. The same small ridge as
+    :func:`fit_logistic` (on training photos where no wrong answer is agreed with, it alone bounds g)."""
+    from scipy.optimize import minimize_scalar
+
+    z, a, y = (np.asarray(v, np.float64) for v in (logit_z, agree, right))
+
+    def loss(g):
+        t = z + g * a
+        return float(np.sum(np.logaddexp(0.0, t) - y * t) + ridge * g * g)
+
+    return float(minimize_scalar(loss, bounds=(-50.0, 50.0), method="bounded", options={"xatol": 1e-6}).x)
+
+
+def second_opinion_answers(confidence: np.ndarray, agree: np.ndarray, gain: float, threshold: float,
+                           floor: float = SECOND_OPINION_FROM) -> np.ndarray:
+    """(n,) bool: the answers given with the second opinion: at or above ``threshold`` on their own, or withheld
+    with at least ``floor`` and agreed with, their confidence with the ``gain`` (:func:`agreed_confidence`)
+    reaching the threshold."""
+    from ..localizer.pipeline import agreed_confidence
+
+    agreed = np.array([agreed_confidence(float(c), gain) for c in confidence])
+    return (confidence >= threshold) | ((confidence >= floor) & agree & (agreed >= threshold))
+
+
+def fit_second_opinion(rows: list[dict], unknown_rows: list[dict], logit: tuple, runner_up_m: float,
+                       threshold: float, floor: float = SECOND_OPINION_FROM) -> dict:
+    """The second opinion fitted on training rows: ``rows`` (fov given, :func:`fit_confidence`'s) and
+    ``unknown_rows`` (the same photos searched with the fov unknown, ``real_localize --fov unknown --no-abstain``:
+    what the second search gives them, to the bit). The gain of an agreed answer's logit (:func:`agreement_gain`,
+    the margin fit ``logit`` held), what it answers on the training rows at ``threshold``, and the same judged a place
+    at a time (the margin fit, its threshold and the gain fitted on the other places). Rows without a
+    fov-unknown row are left out."""
+    unknown = {r["photo"]: r for r in unknown_rows}
+    rows = [r for r in rows if r["photo"] in unknown]
+    right = rows_right(rows)
+    margin = np.array([margin_of(r, runner_up_m) for r in rows])
+    agree = np.array([apart_m(r, unknown[r["photo"]]) <= SECOND_OPINION_M for r in rows])
+    z = np.where(np.isfinite(margin), margin_logistic_logit(np.nan_to_num(margin), logit), -np.inf)
+    confidence = margin_logistic(np.nan_to_num(margin), logit) * np.isfinite(margin)
+    gain = agreement_gain(z[np.isfinite(z)], agree[np.isfinite(z)], right[np.isfinite(z)])
+    given = second_opinion_answers(confidence, agree, gain, threshold, floor)
+    place_of, _ = places_of([])
+    places = np.array([place_of.get(r["photo"], r["photo"]) for r in rows])
+    held_given = np.zeros(len(rows), bool)
+    for place in np.unique(places):
+        held = places == place
+        fit = fit_at(margin[~held], np.zeros((~held).sum()), right[~held])
+        z_other = margin_logistic_logit(np.nan_to_num(margin[~held]), fit["logit"])
+        g = agreement_gain(z_other, agree[~held], right[~held])
+        c_held = confidences(margin[held], np.zeros(held.sum()), fit["logit"])
+        held_given[held] = second_opinion_answers(c_held, agree[held], g, fit["threshold"], floor)
+    alone = confidence >= threshold
+    return {"from": floor, "gain": gain, "apart_m": SECOND_OPINION_M, "photos": len(rows),
+            "agreed": {"right": int((agree & right).sum()), "wrong": int((agree & ~right).sum())},
+            "asked": int(((confidence >= floor) & ~alone).sum()),
+            "answered": {"right": int((given & right).sum()), "wrong": int((given & ~right).sum()),
+                         "alone_right": int((alone & right).sum()), "alone_wrong": int((alone & ~right).sum())},
+            "leave_place_out": {"right": int((held_given & right).sum()), "wrong": int((held_given & ~right).sum())}}
+
+
+def margin_logistic_logit(margin: np.ndarray, logit: tuple) -> np.ndarray:
+    """The logit a + b m of the margin fit (a, b) at ``margin``."""
+    return logit[0] + logit[1] * np.asarray(margin, np.float64)
+
+
 def fov_unknown_threshold(rows: list[dict], logit: tuple, runner_up_m: float, floor: float) -> float:
     """The abstention threshold with the fov unknown: :func:`abstain_threshold` (the same rule) on
     training rows localized that way, scored with the fov-known fit ``logit``; never below ``floor``
@@ -240,20 +325,30 @@ def main(argv=None) -> int:
     parser.add_argument("--fov-unknown-rows", default=None, metavar="JSON", nargs="+",
                         help="`real_localize --side train --fov unknown --no-abstain` runs' JSON: the threshold with "
                         "the fov unknown is set on all their rows together (fov_unknown_threshold)")
+    parser.add_argument("--second-opinion-rows", default=None, metavar="JSON", nargs="+",
+                        help="`real_localize --side train|dev --fov unknown --no-abstain` runs' JSON on the photos of "
+                        "--rows: the second opinion (LocalizeParams.second_opinion_from) is fitted on them "
+                        "(fit_second_opinion)")
     args = parser.parse_args(argv)
-    unknown_rows = None
-    if args.fov_unknown_rows:
-        unknown_rows = []
-        for path in args.fov_unknown_rows:
+    unknown_rows = second_rows = None
+    for option, paths in (("--fov-unknown-rows", args.fov_unknown_rows), ("--second-opinion-rows", args.second_opinion_rows)):
+        if not paths:
+            continue
+        read = []
+        for path in paths:
             try:
                 with open(path) as f:
-                    unknown_rows += [r for r in json.load(f)["photos"] if r["fov_mode"] == "unknown"]
+                    read += [r for r in json.load(f)["photos"] if r["fov_mode"] == "unknown"]
             except (OSError, ValueError, KeyError) as exc:
-                print(f"--fov-unknown-rows: cannot read {path}: {exc}")
+                print(f"{option}: cannot read {path}: {exc}")
                 return 2
-        if set(r["photo"] for r in unknown_rows) & set(_validation_keys()):
-            print("--fov-unknown-rows: the rows hold validation photos; only training-side rows may set the threshold")
+        if set(r["photo"] for r in read) & set(_validation_keys()):
+            print(f"{option}: the rows hold validation photos; only training-side rows may be fitted on")
             return 2
+        if option == "--fov-unknown-rows":
+            unknown_rows = read
+        else:
+            second_rows = read
     if args.from_rows:
         try:
             with open(args.rows) as f:
@@ -297,6 +392,10 @@ def main(argv=None) -> int:
                                                                   out["min_confidence"])
         out["fov_unknown_rows"] = {"files": [os.path.relpath(p, REPO) for p in args.fov_unknown_rows],
                                    "photos": len(unknown_rows)}
+    if second_rows:
+        out["second_opinion"] = fit_second_opinion(rows, second_rows, out["logit"], out["runner_up_m"],
+                                                   out["min_confidence"])
+        out["second_opinion"]["files"] = [os.path.relpath(p, REPO) for p in args.second_opinion_rows]
     with open(args.out, "w") as f:
         json.dump(out, f, indent=1)
     kept, loo = out["kept_by_runner_up_m"], out["leave_place_out"]
@@ -305,7 +404,12 @@ def main(argv=None) -> int:
           f"(right answers kept: {', '.join(f'{d} m {k}' for d, k in kept.items())})"
           + (f"; fov unknown: abstain below {out['min_confidence_fov_unknown']:.2f} ({len(unknown_rows)} photos)"
              if unknown_rows else "") + "; leave place out (answered right / wrong): "
-          + ", ".join(f"{name} {v['right']} / {v['wrong']}" for name, v in loo.items()) + f"; wrote {args.out}")
+          + ", ".join(f"{name} {v['right']} / {v['wrong']}" for name, v in loo.items())
+          + (f"; second opinion from {out['second_opinion']['from']:.2f}: gain {out['second_opinion']['gain']:.2f}, "
+             f"answered right / wrong {out['second_opinion']['answered']['right']} / "
+             f"{out['second_opinion']['answered']['wrong']}, leave place out "
+             f"{out['second_opinion']['leave_place_out']['right']} / {out['second_opinion']['leave_place_out']['wrong']}"
+             if second_rows else "") + f"; wrote {args.out}")
     return 0
 
 
