@@ -992,6 +992,80 @@ def test_localizes_with_unknown_field_of_view(scene, views):
     assert result.fov == pytest.approx(54.0, abs=0.75)
 
 
+def test_a_fov_given_answer_about_to_be_withheld_is_given_where_a_search_with_the_fov_unknown_agrees(scene, views):
+    """The second opinion (stage 4e): with the fov given, an answer whose confidence falls short of the threshold,
+    but not below ``second_opinion_from``, is searched for again with the fov unknown. Where the two best places lie
+    within ``second_opinion_m`` its logit gains ``second_opinion_gain`` and it is given, the second search's place in
+    the stats; where they do not, the abstention stands, with the second place kept; below the floor none is asked."""
+    from dataclasses import replace
+
+    from skyrender.localizer.pipeline import agreed_confidence
+
+    _, terrain, model = scene
+    pose = views.poses[4]
+    image = _photo(terrain, pose)
+    # a margin confidence below 0.75 (logistic of a margin <= 1): the threshold 0.9 withholds every answer
+    params = replace(LocalizeParams(), max_hypotheses=0, fov_candidates=(60.0,), horizon_fov_step=(),
+                     confidence_model="margin", margin_logit=(0.0, 1.0), min_confidence=0.9,
+                     second_opinion_from=0.0, second_opinion_gain=10.0)
+    alone = localize(image, model, 2.0, 60.0, terrain=terrain, params=replace(params, second_opinion_from=math.inf))
+    assert not alone.localized and 0.5 < alone.confidence < 0.75 and alone.stats.second_opinion is None
+    agreed = localize(image, model, 2.0, 60.0, terrain=terrain, params=params)
+    _assert_close(agreed, pose)
+    assert agreed.confidence == pytest.approx(agreed_confidence(alone.confidence, 10.0)) and agreed.confidence > 0.99
+    second = agreed.stats.second_opinion
+    assert second["apart_m"] < 100.0 and np.hypot(*(np.array(second["pose"][:2]) - pose.array()[:2])) < POS_TOL_M
+    assert agreed.stats.seconds["second_opinion"] >= second["seconds"] > 0.0
+    apart = localize(image, model, 2.0, 60.0, terrain=terrain, params=replace(params, second_opinion_m=-1.0))
+    assert not apart.localized and apart.confidence == alone.confidence
+    assert apart.stats.second_opinion["pose"] == second["pose"]  # the same second search, to the bit
+    below = localize(image, model, 2.0, 60.0, terrain=terrain, params=replace(params, second_opinion_from=0.8))
+    assert not below.localized and below.stats.second_opinion is None
+    assert LocalizeParams().second_opinion_from == math.inf  # renders: never
+
+
+def test_an_agreed_answer_s_logit_gains_the_fitted_gain_and_the_fit_holds_no_wrong_answer_agreed_with():
+    """``agreed_confidence`` adds the gain to a confidence's logit (0 and 1 stay); ``agreement_gain`` is large where
+    only right answers are agreed with, about 0 where agreement says nothing; ``fit_second_opinion`` answers an agreed
+    row withheld above the floor, and never one below it or one not agreed with; a rescore applies it from a row's
+    own second opinion or the run's fov-unknown row of the photo."""
+    from skyrender.benchmarks.real_localize import rescore
+    from skyrender.localizer.pipeline import agreed_confidence
+    from skyrender.training.localize_fit import agreement_gain, fit_second_opinion, second_opinion_answers
+
+    assert agreed_confidence(0.5, 2.0) == pytest.approx(1 / (1 + math.exp(-2.0)))
+    assert agreed_confidence(0.0, 5.0) == 0.0 and agreed_confidence(1.0, -5.0) == 1.0
+    assert agreed_confidence(1e-300, -800.0) == 0.0  # no overflow
+    rng = np.random.default_rng(0)
+    z = rng.normal(0.0, 1.0, 400)
+    right = rng.random(400) < 1 / (1 + np.exp(-z))
+    assert agreement_gain(z, right & (rng.random(400) < 0.5), right) > 3.0
+    assert abs(agreement_gain(z, rng.random(400) < 0.5, right)) < 0.6
+    conf = np.array([0.97, 0.7, 0.7, 0.4])
+    agree = np.array([False, True, False, True])
+    assert second_opinion_answers(conf, agree, 5.0, 0.95, 0.5).tolist() == [True, True, False, False]
+
+    def row(photo, xy, score, mode="known", truth=(0.0, 0.0)):
+        return {"photo": photo, "fov_mode": mode, "truth_xy": list(truth), "seconds": 1.0,
+                "refined_poses": [[*xy, 0, 0, 0, 0, 800.0, score], [50_000.0, 0, 0, 0, 0, 0, 800.0, score * 1.05]]}
+
+    logit = (-3.0, 60.0)  # margin 1 - 1/1.05 = 0.048 -> 0.45; 1 - 1/1.1 = 0.091 -> 0.92
+    known = [dict(row("a", (100.0, 0.0), 1.0), error_m=100.0), dict(row("b", (30_000.0, 0.0), 1.0), error_m=30_000.0)]
+    for r in known:
+        r["refined_poses"][1][7] = 1.1
+    unknown = [row("a", (300.0, 0.0), 2.0, "unknown"), row("b", (80_000.0, 0.0), 2.0, "unknown")]
+    fit = fit_second_opinion(known, unknown, logit, 1000.0, 0.95, 0.5)
+    assert fit["agreed"] == {"right": 1, "wrong": 0} and fit["answered"]["right"] == 1 and fit["answered"]["wrong"] == 0
+    second = {"from": 0.5, "gain": fit["gain"], "apart_m": 1000.0}
+    runs = [dict(r, status="abstained", confidence=0.0, second_opinion=None) for r in known]
+    runs[0].update(status="localized", error_m=100.0)
+    out = rescore(runs + [dict(u, status="abstained", confidence=0.0) for u in unknown], logit, 0.95, 1000.0, 0.95,
+                  second)
+    assert out[0]["status"] == "localized" and out[0]["confidence"] > 0.95 and out[1]["status"] == "abstained"
+    with pytest.raises(ValueError, match="second opinion"):
+        rescore(runs, logit, 0.95, 1000.0, 0.95, second)  # no fov-unknown rows to take it from
+
+
 def test_far_horizon_poses_are_moved_before_ranking_with_the_fov_given_and_not_unknown_where_so_set(scene, views):
     """``horizon_rerank`` moves far-horizon poses to the best of a grid around them before they are ranked; with
     ``rerank_fov_unknown`` False only when the fov is given (the photo preset re-ranks with the fov unknown too).

@@ -434,6 +434,24 @@ def test_bench_real_rescores_a_run_under_another_fit_and_refuses_a_bad_one(tmp_p
     assert out[-1].startswith("--fit: cannot read a photo-confidence fit from")
 
 
+def test_a_photo_s_dem_window_does_not_depend_on_the_other_photos_of_the_run():
+    """``real_localize.places_of``: a place's centre (and so its DEM window and model) is the mean of all the data's
+    photos taken there, whether the run holds one of them or the whole side (a run of one place06 photo had a window
+    0.1 deg off, and another answer)."""
+    from skyrender.benchmarks.real_localize import place_window, places_of
+    from skyrender.datasets.real_photos import items_on_side
+
+    data_path("photos", "ch1")
+    side = [it for it in items_on_side("validation") if it.key.startswith("ch1/")]
+    place_of, whole = places_of(side)
+    for it in side[::7]:
+        _, alone = places_of([it])
+        assert alone == {place_of[it.key]: whole[place_of[it.key]]}
+    lats = [it.lat for it in side if place_of[it.key] == "ch1/place06"]
+    assert len(lats) > 1 and whole["ch1/place06"][0] == pytest.approx(np.mean(lats))
+    assert place_window(*places_of(side[:1])[1][place_of[side[0].key]]) == place_window(*whole[place_of[side[0].key]])
+
+
 def test_a_benchmark_run_is_summarised_place_by_place():
     """Each run's table says, per place of the split, how many photos ended within 250 m and 1 km,
     withheld answers included: a change that helps one place only shows as such."""

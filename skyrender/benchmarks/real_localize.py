@@ -25,7 +25,7 @@ import time
 
 import numpy as np
 
-from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
+from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side, photo_items
 from ..diagnostics.oracle import DEM_DIR, tiles_around
 from ..evaluate import git_commit, position_errors
 
@@ -46,12 +46,17 @@ def split_places() -> dict[str, str]:
 
 
 def places_of(items) -> tuple[dict[str, str], dict[str, tuple[float, float]]]:
-    """The place of each photo (:func:`split_places`) and each place's centre
-    (lat, lon: the mean position of the given photos taken there, whose window
-    :func:`place_window` they share)."""
+    """The place of each photo (:func:`split_places`) and the centre of each place of ``items`` (lat, lon: the
+    mean position of all the data's photos taken there, whose window :func:`place_window` they share; the given
+    photos' where the data has none of the place). All of them, not the given ones only: a photo's DEM window, and
+    so its answer, must not depend on which other photos of its place a run holds (a run of one of place06's photos
+    had a window 0.1 deg off the whole side's)."""
     place_of = split_places()
+    wanted = {place_of[it.key] for it in items}
+    pooled = [it for it in (photo_items() if wanted else []) if place_of.get(it.key) in wanted and it.lat is not None]
+    covered = {place_of[it.key] for it in pooled}
     positions: dict[str, list] = {}
-    for it in items:
+    for it in pooled + [it for it in items if place_of[it.key] not in covered]:
         positions.setdefault(place_of[it.key], []).append((it.lat, it.lon))
     return place_of, {place: tuple(np.mean(p, axis=0)) for place, p in positions.items()}
 
@@ -168,7 +173,8 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
                    "runner_up_score": result.stats.runner_up_score, "part_margin": result.stats.part_margin,
                    "truth_xy": [tx, ty],
                    "refined_poses": [list(r) for r in result.stats.refined_poses],
-                   "refined_slopes": list(result.stats.refined_slopes)}
+                   "refined_slopes": list(result.stats.refined_slopes),
+                   "second_opinion": result.stats.second_opinion}
             if math.isfinite(params.max_answer_slope_deg):  # the answer was chosen among poses on such ground
                 row["max_answer_slope_deg"] = params.max_answer_slope_deg
             if result.localized:
@@ -384,7 +390,7 @@ def logit_text(logit) -> str:
 
 
 def rescore(rows: list[dict], logit: tuple, threshold: float, runner_up_m: float = 1000.0,
-            threshold_fov_unknown: float | None = None) -> list[dict]:
+            threshold_fov_unknown: float | None = None, second_opinion: dict | None = None) -> list[dict]:
     """The rows under another photo confidence (logistic ``logit`` of the margin to the best
     refined pose farther than ``runner_up_m``, :func:`margin_of`, and of the best score,
     :func:`log_best_of`; abstaining below ``threshold``, or
@@ -393,9 +399,14 @@ def rescore(rows: list[dict], logit: tuple, threshold: float, runner_up_m: float
     ``withheld_error_m``), and an answer an earlier rescore withheld is given again. An abstention of
     the run itself that the new confidence would answer needs a new run (its pose was not kept):
     ValueError. A ``logit`` with a part-margin term reads each row's ``part_margin``
-    (:func:`with_part_margins`); a row with poses but none: ValueError."""
-    from ..localizer.pipeline import margin_logistic, uses_part_margin
+    (:func:`with_part_margins`); a row with poses but none: ValueError. With ``second_opinion`` (a fit's: ``from``,
+    ``gain``, ``apart_m``) a fov-given row withheld with at least ``from`` gains ``gain`` where the second search's best
+    place lies within ``apart_m`` (:func:`~skyrender.localizer.pipeline.agreed_confidence`): the row's own second opinion,
+    or, where it asked none (a run without abstention), the same photo's fov-unknown row of ``rows`` (what the second
+    search gives, to the bit); with neither, ValueError."""
+    from ..localizer.pipeline import agreed_confidence, margin_logistic, uses_part_margin
 
+    unknown = {r["photo"]: r for r in rows if r.get("fov_mode") == "unknown"}
     out = []
     for r in rows:
         r = dict(r)
@@ -405,6 +416,17 @@ def rescore(rows: list[dict], logit: tuple, threshold: float, runner_up_m: float
             if part is None and uses_part_margin(logit):
                 raise ValueError(f"{r['photo']}: no part margin (real_localize.with_part_margins)")
             r["confidence"] = float(margin_logistic(margin, logit, log_best_of(r), part or 0.0))
+            if (second_opinion and r.get("fov_mode") == "known"
+                    and second_opinion["from"] <= r["confidence"] < threshold):
+                if r.get("second_opinion"):
+                    apart = float(r["second_opinion"]["apart_m"])
+                elif r["photo"] in unknown:
+                    apart = apart_m(r, unknown[r["photo"]])
+                else:
+                    raise ValueError(f"{r['photo']}: asks for a second opinion that the run has not got "
+                                     "(run it with --fov known unknown)")
+                if apart <= second_opinion["apart_m"]:
+                    r["confidence"] = agreed_confidence(r["confidence"], second_opinion["gain"])
         needed = threshold_fov_unknown if r.get("fov_mode") == "unknown" and threshold_fov_unknown is not None else threshold
         if r["status"] == "localized" and r["confidence"] < needed:
             r["status"], r["withheld_error_m"] = "abstained", r.pop("error_m")
@@ -491,35 +513,33 @@ def main(argv=None) -> int:
         with open(os.path.join(args.out, f"{name}.json")) as f:
             report = json.load(f)
         if args.rescore:
-            from ..localizer.pipeline import (
-                PHOTO_MARGIN_LOGIT,
-                PHOTO_MIN_CONFIDENCE,
-                PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN,
-                PHOTO_RUNNER_UP_M,
-                uses_part_margin,
-            )
+            from ..localizer.pipeline import PHOTO_CONFIDENCE_FILE, uses_part_margin
 
-            logit, threshold, runner_up_m, threshold_unknown = (PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE,
-                                                                 PHOTO_RUNNER_UP_M, PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN)
-            if args.fit:
-                try:
-                    with open(args.fit) as f:
-                        fit = json.load(f)
-                    logit, threshold = tuple(float(v) for v in fit["logit"]), float(fit["min_confidence"])
-                    runner_up_m = float(fit.get("runner_up_m", 1000.0))
-                    threshold_unknown = float(fit.get("min_confidence_fov_unknown", threshold))
-                except (OSError, ValueError, KeyError, TypeError) as exc:
-                    print(f"--fit: cannot read a photo-confidence fit from {args.fit}: {exc}")
-                    return 2
+            try:
+                with open(args.fit or PHOTO_CONFIDENCE_FILE) as f:
+                    fit = json.load(f)
+                logit, threshold = tuple(float(v) for v in fit["logit"]), float(fit["min_confidence"])
+                runner_up_m = float(fit.get("runner_up_m", 1000.0))
+                threshold_unknown = float(fit.get("min_confidence_fov_unknown", threshold))
+                second = fit.get("second_opinion")
+                second = second and {k: float(second[k]) for k in ("from", "gain", "apart_m")}
+            except (OSError, ValueError, KeyError, TypeError) as exc:
+                print(f"--fit: cannot read a photo-confidence fit from {args.fit or PHOTO_CONFIDENCE_FILE}: {exc}")
+                return 2
             if any("refined_poses" not in r for r in report["photos"]) and runner_up_m != 1000.0:
                 print(f"--rescore: {name} keeps no refined poses, so its runner-ups beyond {runner_up_m:.0f} m "
                       "are unknown; run the benchmark again")
                 return 2
             if uses_part_margin(logit):  # rows of runs before the part margin: rendered now
                 with_part_margins(report["photos"], {it.key: it for it in items_on_side(args.side) if it.lat is not None})
-            report["photos"] = rescore(report["photos"], logit, threshold, runner_up_m, threshold_unknown)
+            try:
+                report["photos"] = rescore(report["photos"], logit, threshold, runner_up_m, threshold_unknown, second)
+            except ValueError as exc:
+                print(f"--rescore: {exc}")
+                return 2
             report["rescored"] = {"at": git_commit(), "logit": list(logit), "min_confidence": threshold,
                                   "runner_up_m": runner_up_m, "min_confidence_fov_unknown": threshold_unknown,
+                                  "second_opinion": second,
                                   **({"fit": os.path.relpath(args.fit, REPO)} if args.fit else {})}
     else:
         # rows are appended to <name>.rows.jsonl as they come, so an interrupted run resumes
