@@ -468,6 +468,25 @@ def test_a_benchmark_run_is_summarised_place_by_place():
                          "? 0 / 0 of 1, place03 1 / 1 of 2, place11 1 / 2 of 2")
 
 
+def test_a_benchmark_run_says_how_often_each_confidence_was_right():
+    """``real_localize.calibration``: every answer, given or withheld (its best refined pose against the truth),
+    binned by confidence, with the share within 1 km per bin and the Brier score; rows without poses left out."""
+    from skyrender.benchmarks.real_localize import calibration, table
+
+    def row(conf, x):
+        return {"photo": "p", "confidence": conf, "truth_xy": [0.0, 0.0],
+                "refined_poses": [[x, 0, 0, 0, 0, 0, 800, 1.0], [9e4, 0, 0, 0, 0, 0, 800, 0.5 + 1.0]]}
+
+    rows = [row(0.1, 5e4), row(0.2, 300.0), row(0.97, 200.0), row(0.999, 100.0), row(0.999, 2e4), {"confidence": 0.5}]
+    cal = calibration(rows)
+    assert cal["photos"] == 5 and [b["photos"] for b in cal["bins"]] == [2, 0, 0, 1, 2]
+    assert cal["bins"][0]["share_right"] == 0.5 and cal["bins"][0]["mean_confidence"] == pytest.approx(0.15)
+    assert cal["bins"][4]["share_right"] == 0.5 and cal["bins"][1]["share_right"] is None
+    assert cal["brier"] == pytest.approx(np.mean([0.1 ** 2, 0.8 ** 2, 0.03 ** 2, 0.001 ** 2, 0.999 ** 2]))
+    text = table({"photos": [], "summary": {}, "calibration": {"known": cal}})
+    assert "known fov calibration" in text and "0.99: 2, 1.00, 0.50" in text and f"Brier {cal['brier']:.3f}" in text
+
+
 def test_an_extractor_run_is_compared_with_the_committed_benchmark_photo_by_photo():
     """``skyline_photos.unchanged_report``: the identity check after a change counts the photos whose median
     and share within 5 px are the committed ones, and names each that moved."""

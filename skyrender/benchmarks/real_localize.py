@@ -205,6 +205,34 @@ def summary(rows: list[dict]) -> dict:
     return out
 
 
+#: Confidence bins of :func:`calibration` (lower edges; the last bin holds 1.0).
+CALIBRATION_BINS = (0.0, 0.5, 0.8, 0.95, 0.99)
+
+
+def calibration(rows: list[dict], right_m: float = 1000.0) -> dict:
+    """Whether a confidence means the probability of being within ``right_m`` (m): every row's answer, given or
+    withheld (its best refined pose, :func:`answer_xy`, against its true position), binned by its confidence
+    (:data:`CALIBRATION_BINS`): photos, mean confidence and share within ``right_m`` per bin, and the Brier score (the
+    mean squared difference of confidence and outcome). Rows without refined poses or truth are left out."""
+    conf, right = [], []
+    for r in rows:
+        xy = answer_xy(r)
+        if r.get("truth_xy") is None or not np.isfinite(xy).all():
+            continue
+        conf.append(float(r["confidence"]))
+        right.append(float(np.hypot(*(xy - np.asarray(r["truth_xy"], np.float64))) <= right_m))
+    conf_a, right_a = np.array(conf), np.array(right)
+    edges = np.r_[CALIBRATION_BINS, np.inf]
+    bins = []
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        pick = (conf_a >= lo) & (conf_a < hi) if np.isfinite(hi) else conf_a >= lo
+        bins.append({"from": float(lo), "photos": int(pick.sum()),
+                     "mean_confidence": float(conf_a[pick].mean()) if pick.any() else None,
+                     "share_right": float(right_a[pick].mean()) if pick.any() else None})
+    return {"right_m": right_m, "photos": len(conf), "bins": bins,
+            "brier": float(np.mean((conf_a - right_a) ** 2)) if len(conf) else None}
+
+
 def by_place(rows: list[dict], place_of: dict[str, str]) -> dict[str, dict]:
     """Per place (``place_of``: photo key -> place; "?" for a photo it lacks), in place order: the
     photos, and how many ended within 250 m and within 1 km, answered or withheld (a rescored
@@ -451,6 +479,13 @@ def table(report: dict) -> str:
                      f"{100 * s['recall_250m']:.0f} %, 1 km {100 * s['recall_1000m']:.0f} %; abstained {s['abstained']}; "
                      f"confident and > 1 km wrong {s['wrong_over_1km']}; median {s['median_seconds']:.1f} s"
                      + (f"; withheld but within 1 km {s['withheld_within_1km']}" if s.get("withheld_within_1km") else ""))
+    for m, cal in report.get("calibration", {}).items():
+        if cal["photos"]:
+            lines.append(f"{m} fov calibration (every answer, given or withheld; confidence from: photos, mean confidence, "
+                         f"share within {cal['right_m'] / 1000:.0f} km): " + ", ".join(
+                             f"{b['from']:.2f}: {b['photos']}" + (f", {b['mean_confidence']:.2f}, {b['share_right']:.2f}"
+                                                                  if b["photos"] else "") for b in cal["bins"])
+                         + f"; Brier {cal['brier']:.3f}")
     for m, places in report.get("by_place", {}).items():
         lines.append(f"{m} fov by place (within 250 m / 1 km of photos, answered or withheld): " + ", ".join(
             f"{name.split('/')[-1]} {p['within_250m']} / {p['within_1000m']} of {p['photos']}" for name, p in places.items()))
@@ -570,6 +605,7 @@ def main(argv=None) -> int:
     report["summary"] = {m: summary([r for r in report["photos"] if r["fov_mode"] == m]) for m in modes}
     place_of = split_places()
     report["by_place"] = {m: by_place([r for r in report["photos"] if r["fov_mode"] == m], place_of) for m in modes}
+    report["calibration"] = {m: calibration([r for r in report["photos"] if r["fov_mode"] == m]) for m in modes}
     text = table(report)
     print(text)
     os.makedirs(args.out, exist_ok=True)

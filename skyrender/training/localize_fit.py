@@ -30,7 +30,10 @@ refits without localizing. With ``--fov-unknown-rows`` (``real_localize --side t
 runs' JSON; ``make fit-photo-confidence`` passes ``experiments/ch1/dem-window/unknown/``'s 20 train photos and 21
 dev photos, both localized by the shipped fov-unknown search) the fov-unknown mode gets a
 threshold of its own by the same rule
-(:func:`fov_unknown_threshold`). The validation side is never used here.
+(:func:`fov_unknown_threshold`). With ``--second-opinion-rows`` (fov-unknown runs of the same training photos as
+the rows) the second opinion is fitted (:func:`fit_second_opinion`): how much an answer's logit gains where a search
+with the fov unknown ends within 1 km of it (``LocalizeParams.second_opinion_from``). The validation side is never
+used here.
 """
 
 from __future__ import annotations

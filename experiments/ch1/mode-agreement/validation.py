@@ -37,7 +37,8 @@ secs = secs_alone + np.where(asked, [unknown[r["photo"]]["seconds"] for r in kno
 n = len(known)
 print("photo                               margin conf  asked  apart m   with it   error m  verdict")
 for r, c, a, ap, g, e in zip(known, conf, asked, apart, agreed, err):
-    verdict = ("answered" if c >= threshold else "GAINED" if g >= threshold else "withheld") + (" right" if e <= 1000 else " WRONG")
+    verdict = "answered" if c >= threshold else "GAINED" if g >= threshold else "withheld"
+    verdict += " right" if e <= 1000 else " WRONG"
     print(f"{r['photo']:36s} {c:11.3f}  {'yes' if a else '-':5s} {ap:8.0f}  {g:8.3f}  {e:8.0f}  {verdict}")
 for name, ans, s in (("margin alone (shipped)", alone, secs_alone), ("with the second opinion", given, secs)):
     within = [100 * np.sum(ans & (err <= d)) / n for d in (100, 250, 1000)]
