@@ -61,7 +61,7 @@ bench-split: install
 #   --out experiments/ch1/dem-window/unknown, and --side dev (all 21) --tag unknown-dev)
 fit-photo-confidence: install
 	$(BIN)/python -m skyrender.training.localize_fit --fov-unknown-rows experiments/ch1/rerank-cut-fov-unknown/bench-real-train-cut300.json \
-		experiments/ch1/rerank-cut-fov-unknown/bench-real-dev-cut300.json \
+		experiments/ch1/rerank-cut-fov-unknown/bench-real-dev-cut300.json experiments/ch1/mode-agreement/bench-real-train-rest32.json \
 		--second-opinion-rows experiments/ch1/rerank-cut-fov-unknown/bench-real-train-cut300.json \
 		experiments/ch1/rerank-cut-fov-unknown/bench-real-dev-cut300.json experiments/ch1/mode-agreement/bench-real-train-rest32.json
 

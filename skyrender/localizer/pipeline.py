@@ -734,17 +734,18 @@ def _second_opinion(search: "_Search", accepted: "_Candidate | None", result: Lo
     second, second_accepted, _ = _search_and_decide(photo, search.model, search.terrain, search.height, None, prior,
                                                     params, other, search.curvature, search.solver, time.perf_counter())
     second_best, _ = _answer(second, second_accepted)
+    withheld = replace(result, seconds=time.perf_counter() - t_start)  # the second search's time counted
     if best is None or second_best is None:
-        return result
+        return withheld
     apart = float(np.hypot(*(np.asarray(best.refined.pose[:2]) - np.asarray(second_best.refined.pose[:2]))))
     stats.second_opinion = {"pose": [float(v) for v in (*second_best.refined.pose, second_best.refined.f_px,
                                                          second_best.refined.score)],
                             "apart_m": apart, "seconds": round(sum(other.seconds.values()), 4)}
     if apart > params.second_opinion_m:
-        return result
+        return withheld
     confidence = agreed_confidence(result.confidence, params.second_opinion_gain)
     if confidence < params.abstain_below(False):
-        return replace(result, confidence=confidence)
+        return replace(withheld, confidence=confidence)
     return _localized(search, best, confidence, t_start)
 
 
@@ -783,9 +784,12 @@ def _in_photo_pixels(result: LocalizationResult, terrain: Terrain, sky: np.ndarr
                      searched_width: int) -> LocalizationResult:
     """A result searched on a reduced skyline (:func:`reduce_skyline`) in the photo's own pixels: its
     intrinsics (the same fov), the photo's skyline, the answer's skyline rendered at the photo's size,
-    and the refined poses' focal lengths (stats)."""
+    and the refined poses' and the second opinion's focal lengths (stats)."""
     scale = W / searched_width
     result.stats.refined_poses = [(*r[:6], r[6] * scale, r[7]) for r in result.stats.refined_poses]
+    if result.stats.second_opinion is not None:
+        pose = result.stats.second_opinion["pose"]
+        result.stats.second_opinion["pose"] = [*pose[:6], pose[6] * scale, pose[7]]
     fov = result.fov if result.localized else result.intrinsics.fov
     k = Intrinsics.from_fov(fov, W, H)
     rendered = render_skylines(terrain, result.pose, k) if result.localized else None

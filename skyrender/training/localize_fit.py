@@ -27,9 +27,9 @@ the default: the 3 km it chose did not hold on the validation side). Fit, D and 
 ``skyrender/localizer/photo_confidence.json``, which the photo preset reads; the localization rows
 (refined poses, truth) to ``experiments/ch1/confidence-train-rows.json``, from which ``--from-rows``
 refits without localizing. With ``--fov-unknown-rows`` (``real_localize --side train --fov unknown --no-abstain``
-runs' JSON; ``make fit-photo-confidence`` passes ``experiments/ch1/dem-window/unknown/``'s 20 train photos and 21
-dev photos, both localized by the shipped fov-unknown search) the fov-unknown mode gets a
-threshold of its own by the same rule
+runs' JSON; ``make fit-photo-confidence`` passes all 73 training-side photos localized by the shipped fov-unknown
+search: the 41 of ``experiments/ch1/rerank-cut-fov-unknown/`` and the 32 of ``experiments/ch1/mode-agreement/``) the
+fov-unknown mode gets a threshold of its own by the same rule
 (:func:`fov_unknown_threshold`). With ``--second-opinion-rows`` (fov-unknown runs of the same training photos as
 the rows) the second opinion is fitted (:func:`fit_second_opinion`): how much an answer's logit gains where a search
 with the fov unknown ends within 1 km of it (``LocalizeParams.second_opinion_from``). The validation side is never
