@@ -17,5 +17,6 @@ for mode in ("known", "unknown"):
     same = sum(np.array_equal(np.array(r["refined_poses"]), np.array(o[r["photo"]]["refined_poses"])) for r in rows)
     moved = [(r["photo"], o[r["photo"]]["status"], r["status"], round(o[r["photo"]]["confidence"], 4), round(r["confidence"], 4))
              for r in rows if r["status"] != o[r["photo"]]["status"] or r["confidence"] != o[r["photo"]]["confidence"]]
+    seconds, before = np.median([r["seconds"] for r in rows]), np.median([r["seconds"] for r in o.values()])
     print(f"  fov {mode}: refined poses the same to the bit {same} of {len(rows)}; status or confidence moved: {moved}; "
-          f"median seconds {np.median([r['seconds'] for r in rows]):.1f} (f639301 {np.median([r['seconds'] for r in o.values()]):.1f})")
+          f"median seconds {seconds:.1f} (f639301 {before:.1f})")
