@@ -319,15 +319,33 @@ def localize(
         where = f" (lat {d['lat']:.5f}, lon {d['lon']:.5f})" if d["lat"] is not None else ""
         typer.echo(f"localized: x={d['x']:.1f} y={d['y']:.1f} z={d['z']:.1f}{where} pan={d['pan']:.2f} "
                    f"tilt={d['tilt']:.2f} swing={d['swing']:.2f} fov={d['fov']:.2f}; confidence "
-                   f"{d['confidence']:.2f}; {d['hypotheses']} hypotheses in {d['seconds']:.1f} s")
+                   f"{d['confidence']:.2f}{second_opinion_text(result.stats.second_opinion, True, params.second_opinion_m)}; "
+                   f"{d['hypotheses']} hypotheses in {d['seconds']:.1f} s")
     else:
         # with the fov unknown the photo preset answers less often (a wrong focal length is one more freedom for a
         # wrong place: experiments/ch1/other-fov-runner-up/): say what would change that
         hint = ("; the field of view was unknown: give --fov (or a photo with an EXIF focal length)"
                 if fov is None else "")
+        second = second_opinion_text(result.stats.second_opinion, False, params.second_opinion_m)
         typer.echo(f"abstained: no pose found that fits the skyline well enough ({result.hypotheses} hypotheses, "
-                   f"{result.seconds:.1f} s){hint}")
+                   f"{result.seconds:.1f} s){second}{hint}")
     return 0 if result.localized else 3
+
+
+def second_opinion_text(second_opinion: dict | None, localized: bool, agree_m: float = 1000.0) -> str:
+    """What the CLI says of a second opinion (``LocalizeStats.second_opinion``; None: none asked): that a search
+    with the fov unknown agreed with the answer (its best place within ``agree_m``), or where it ended instead. The
+    search took as long again, and an analyst weighs an answer it agreed with, or a place it found elsewhere,
+    differently."""
+    if not second_opinion:
+        return ""
+    apart = float(second_opinion["apart_m"])
+    far = f"{apart / 1000:.1f} km" if apart >= 1000 else f"{apart:.0f} m"
+    if localized:
+        return f" (a second search with the fov unknown agreed: its best place {far} away)"
+    if apart <= agree_m:
+        return f"; a second search with the fov unknown agreed ({far} away), not enough to answer"
+    return f"; a second search with the fov unknown ended {far} away"
 
 
 @app.command()

@@ -202,3 +202,16 @@ def test_overlay_labels_of_nearby_peaks_do_not_overlap():
     assert spots[0] == (104, 72)  # the first (highest) keeps its place beside its peak
     # no room at all: the label is dropped, not drawn over another
     assert place_labels([(5, 5), (6, 6)], [(300, 10)] * 2, (20, 40)) == [None, None]
+
+
+def test_the_cli_says_what_a_second_opinion_found():
+    """``skyrender localize``'s line names a second opinion (the photo preset with the fov given): agreed with an
+    answer, agreed but not enough, or where it ended; nothing when none was asked."""
+    from skyrender.cli import second_opinion_text
+
+    assert second_opinion_text(None, True) == "" and second_opinion_text({}, False) == ""
+    assert second_opinion_text({"apart_m": 341.3}, True) == (
+        " (a second search with the fov unknown agreed: its best place 341 m away)")
+    assert second_opinion_text({"apart_m": 341.3}, False).endswith("agreed (341 m away), not enough to answer")
+    assert second_opinion_text({"apart_m": 56928.0}, False) == "; a second search with the fov unknown ended 56.9 km away"
+    assert "ended 1.5 km" in second_opinion_text({"apart_m": 1500.0}, False, agree_m=1000.0)
