@@ -729,11 +729,11 @@ def _second_opinion(search: "_Search", accepted: "_Candidate | None", result: Lo
     ``localize_fit``), and the answer is given if that reaches the threshold; otherwise the abstention stands.
     The second search's best place and the distance are kept in the stats."""
     params, stats = search.params, search.stats
-    best, _ = _answer(search, accepted)
+    best, _ = _best_refined(search, accepted)  # the answer _decide withheld (its confidence is the result's)
     other = LocalizeStats()
     second, second_accepted, _ = _search_and_decide(photo, search.model, search.terrain, search.height, None, prior,
                                                     params, other, search.curvature, search.solver, time.perf_counter())
-    second_best, _ = _answer(second, second_accepted)
+    second_best, _ = _best_refined(second, second_accepted)
     withheld = replace(result, seconds=time.perf_counter() - t_start)  # the second search's time counted
     if best is None or second_best is None:
         return withheld
@@ -1092,11 +1092,7 @@ def _answer(search: _Search, accepted: _Candidate | None) -> tuple[_Candidate | 
     the runner-up (0 when nothing was refined); the best and runner-up scores go to the stats."""
     params, stats = search.params, search.stats
     W, H = search.width, search.img_height
-    done = sorted([c for c in search.candidates if c.refined is not None], key=lambda c: c.refined.score)
-    if accepted is None and done:
-        keep = standable_mask([c.ground_slope for c in done], params.max_answer_slope_deg)
-        done = [c for c, k in zip(done, keep) if k]
-    best = accepted or (done[0] if done else None)
+    best, done = _best_refined(search, accepted)
     if best is None:
         return None, 0.0
     if params.runner_up_m is None:
@@ -1119,6 +1115,16 @@ def _answer(search: _Search, accepted: _Candidate | None) -> tuple[_Candidate | 
         stats.part_margin = part
     return best, margin_confidence(best.refined.score, runner_up.score if runner_up else np.inf,
                                    params.margin_logit, W, part)
+
+
+def _best_refined(search: _Search, accepted: _Candidate | None) -> tuple[_Candidate | None, list[_Candidate]]:
+    """The answer's candidate (the accepted one if any, else the best refined; None when nothing was refined) and
+    the refined candidates it is chosen among, best first (on standable ground, ``max_answer_slope_deg``)."""
+    done = sorted([c for c in search.candidates if c.refined is not None], key=lambda c: c.refined.score)
+    if accepted is None and done:
+        keep = standable_mask([c.ground_slope for c in done], search.params.max_answer_slope_deg)
+        done = [c for c, k in zip(done, keep) if k]
+    return accepted or (done[0] if done else None), done
 
 
 def _localized(search: _Search, best: _Candidate, confidence: float, t_start: float) -> LocalizationResult:

@@ -228,7 +228,7 @@ def fit_second_opinion(rows: list[dict], unknown_rows: list[dict], logit: tuple,
     margin = np.array([margin_of(r, runner_up_m) for r in rows])
     agree = np.array([apart_m(r, unknown[r["photo"]]) <= SECOND_OPINION_M for r in rows])
     z = np.where(np.isfinite(margin), margin_logistic_logit(np.nan_to_num(margin), logit), -np.inf)
-    confidence = margin_logistic(np.nan_to_num(margin), logit) * np.isfinite(margin)
+    confidence = 1.0 / (1.0 + np.exp(-z))  # margin_logistic's, to the bit; 0 without a pose
     gain = agreement_gain(z[np.isfinite(z)], agree[np.isfinite(z)], right[np.isfinite(z)])
     given = second_opinion_answers(confidence, agree, gain, threshold, floor)
     place_of, _ = places_of([])
