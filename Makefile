@@ -58,12 +58,16 @@ bench-split: install
 # refit the photo confidence of the localizer on the 73 CH1 photos of the training side (~40 min)
 # the fov-unknown threshold comes from the training rows localized that way (regenerate them with the localizer:
 # python -m skyrender.benchmarks.real_localize --side train --fov unknown --limit 20 --no-abstain --tag unknown-train
-#   --out experiments/ch1/dem-window/unknown, and --side dev (all 21) --tag unknown-dev)
+#   --out experiments/ch1/dem-window/unknown, and --side dev (all 21) --tag unknown-dev); the second opinion is fitted on
+# what its search gives each photo: those rows, and for the 5 dev photos narrower than the fov-unknown search reaches,
+# python -m skyrender.benchmarks.real_localize --side dev --fov second --no-abstain --photos <them> --tag second-telephoto
+#   --out experiments/ch1/telephoto-second-opinion
 fit-photo-confidence: install
 	$(BIN)/python -m skyrender.training.localize_fit --fov-unknown-rows experiments/ch1/rerank-cut-fov-unknown/bench-real-train-cut300.json \
 		experiments/ch1/rerank-cut-fov-unknown/bench-real-dev-cut300.json experiments/ch1/mode-agreement/bench-real-train-rest32.json \
 		--second-opinion-rows experiments/ch1/rerank-cut-fov-unknown/bench-real-train-cut300.json \
-		experiments/ch1/rerank-cut-fov-unknown/bench-real-dev-cut300.json experiments/ch1/mode-agreement/bench-real-train-rest32.json
+		experiments/ch1/rerank-cut-fov-unknown/bench-real-dev-cut300.json experiments/ch1/mode-agreement/bench-real-train-rest32.json \
+		experiments/ch1/telephoto-second-opinion/bench-real-dev-second-telephoto.json
 
 # retrain the sky network and refit the boundary search on the training split (CPU, ~10 min);
 # reproduces skyrender/features/weights/ for the seed

@@ -1059,11 +1059,59 @@ def test_an_agreed_answer_s_logit_gains_the_fitted_gain_and_the_fit_holds_no_wro
     second = {"from": 0.5, "gain": fit["gain"], "apart_m": 1000.0}
     runs = [dict(r, status="abstained", confidence=0.0, second_opinion=None) for r in known]
     runs[0].update(status="localized", error_m=100.0)
-    out = rescore(runs + [dict(u, status="abstained", confidence=0.0) for u in unknown], logit, 0.95, 1000.0, 0.95,
-                  second)
+    unknown_runs = [dict(u, status="abstained", confidence=0.0) for u in unknown]
+    wide = {"a": 800.0, "b": 800.0}  # 65 deg on 1024 px: the fov-unknown search is the second opinion's
+    out = rescore(runs + unknown_runs, logit, 0.95, 1000.0, 0.95, second, wide)
     assert out[0]["status"] == "localized" and out[0]["confidence"] > 0.95 and out[1]["status"] == "abstained"
     with pytest.raises(ValueError, match="second opinion"):
-        rescore(runs, logit, 0.95, 1000.0, 0.95, second)  # no fov-unknown rows to take it from
+        rescore(runs, logit, 0.95, 1000.0, 0.95, second, wide)  # no fov-unknown rows to take it from
+    narrow = {"a": 3000.0, "b": 3000.0}  # 19 deg: beyond the fov-unknown search's reach, its rows are no second opinion
+    with pytest.raises(ValueError, match="second opinion"):
+        rescore(runs + unknown_runs, logit, 0.95, 1000.0, 0.95, second, narrow)
+    seconds = [dict(u, fov_mode="second") for u in unknown_runs]  # real_localize --fov second: the scaled search
+    out = rescore(runs + unknown_runs + seconds, logit, 0.95, 1000.0, 0.95, second, narrow)
+    assert out[0]["status"] == "localized" and out[1]["status"] == "abstained"
+
+
+def test_a_second_opinion_searches_a_range_scaled_to_a_given_fov_the_fov_unknown_search_does_not_reach(
+        scene, views, monkeypatch):
+    """The second opinion's search is the fov-unknown search where that reaches the given fov (its coarse fovs less
+    and plus every probe step: the photo preset's 27.5-72.5 deg), and elsewhere that search with its coarse fovs and
+    steps scaled by the given fov over the middle coarse one: a 19.5-deg telephoto is searched at 13.65 / 19.5 /
+    25.35 deg with probes of 1.95 and 0.975 deg. The localizer runs it so."""
+    from dataclasses import replace
+
+    from skyrender.localizer import pipeline
+    from skyrender.localizer.pipeline import fov_within_reach, second_opinion_params
+
+    photo = LocalizeParams.for_photos()
+    assert photo.fov_candidates == (35.0, 50.0, 65.0) and photo.horizon_fov_step == (5.0, 2.5)
+    assert fov_within_reach(photo, 27.5) and fov_within_reach(photo, 72.5) and fov_within_reach(photo, 56.8)
+    assert not fov_within_reach(photo, 27.4) and not fov_within_reach(photo, 72.6)
+    assert second_opinion_params(photo, 56.8) is photo
+    tele = second_opinion_params(photo, 19.5)
+    np.testing.assert_allclose(tele.fov_candidates, (13.65, 19.5, 25.35))
+    np.testing.assert_allclose(tele.horizon_fov_step, (1.95, 0.975))
+    assert replace(tele, fov_candidates=photo.fov_candidates, horizon_fov_step=photo.horizon_fov_step) == photo
+    assert second_opinion_params(photo, 80.0).fov_candidates == pytest.approx((56.0, 80.0, 104.0))
+
+    _, terrain, model = scene
+    image = _photo(terrain, views.poses[4])
+    params = replace(LocalizeParams(), max_hypotheses=0, fov_candidates=(60.0,), horizon_fov_step=(),
+                     confidence_model="margin", margin_logit=(0.0, 1.0), min_confidence=0.9, second_opinion_from=0.0)
+    searched = []
+    search_and_decide = pipeline._search_and_decide
+
+    def spy(photo_, model_, terrain_, height, fov, prior, params_, *rest):
+        searched.append((fov, params_.fov_candidates))
+        return search_and_decide(photo_, model_, terrain_, height, fov, prior, params_, *rest)
+
+    monkeypatch.setattr(pipeline, "_search_and_decide", spy)
+    localize(image, model, 2.0, 60.0, terrain=terrain, params=params)
+    assert searched == [(60.0, (60.0,)), (None, (60.0,))]  # reached: the fov-unknown search as it is
+    searched.clear()
+    localize(image, model, 2.0, 60.0, terrain=terrain, params=replace(params, fov_candidates=(30.0,)))
+    assert searched == [(60.0, (30.0,)), (None, (60.0,))]  # 30 deg never comes to 60: scaled to it
 
 
 def test_far_horizon_poses_are_moved_before_ranking_with_the_fov_given_and_not_unknown_where_so_set(scene, views):

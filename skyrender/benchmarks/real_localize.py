@@ -132,12 +132,14 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
     """Localize each photo (``params``: LocalizeParams, default the photo preset; ``model_params``:
     ModelParams, default the photo preset's; ``true_skyline``: from the photo's true skyline, every
     column trusted, instead of the extracted one: what a perfect extractor would give); rows as in
-    the module doc. The fov-unknown mode runs on every ``unknown_every``-th photo only (it
-    searches several focal lengths, so it takes several times longer). ``done`` maps
+    the module doc; ``fov_modes`` of ``known``, ``unknown`` and ``second`` (the search of a fov-given answer's
+    second opinion, :func:`~skyrender.localizer.pipeline.second_opinion_params`). The fov-unknown mode runs on
+    every ``unknown_every``-th photo only (it searches several focal lengths, so it takes several times longer). ``done`` maps
     (photo, fov mode) to rows of an interrupted run, kept as they are (that place's model is
     not even loaded when all its photos are done); ``on_row(row)`` is called on each new row."""
     from ..features import extract_skyline, load_photo
     from ..localizer import LocalizeParams, localize
+    from ..localizer.pipeline import second_opinion_params
 
     place_of, centres = places_of(items)
     loaded: dict[str, tuple] = {}
@@ -164,8 +166,12 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
             t = time.perf_counter()
             image = load_photo(it.image_path)
             skyline = true_extraction(it, image.shape[0]) if true_skyline else extract_skyline(image, params.skyline_params())
-            fov = float(np.degrees(2 * np.arctan(image.shape[1] / (2 * it.focal_px)))) if mode == "known" else None
-            result = localize(image, model, 2.0, fov, terrain=terrain, skyline=skyline, params=params)
+            given = float(np.degrees(2 * np.arctan(image.shape[1] / (2 * it.focal_px))))
+            # "second": the search a fov-given answer's second opinion runs (the fov unknown, its range scaled to the
+            # given fov where the fov-unknown search does not reach it), for fitting the second opinion
+            run_params = second_opinion_params(params, given) if mode == "second" else params
+            result = localize(image, model, 2.0, given if mode == "known" else None, terrain=terrain, skyline=skyline,
+                              params=run_params)
             seconds = time.perf_counter() - t
             row = {"photo": it.key, "fov_mode": mode, "status": result.status, "confidence": result.confidence,
                    "seconds": seconds, "model_seconds": model_seconds, "window": window, "width": image.shape[1],
@@ -417,8 +423,32 @@ def logit_text(logit) -> str:
     return text
 
 
+def given_fov(row: dict, focal_px: float) -> float:
+    """The horizontal fov (deg) a row's photo is given: from its focal length (px) at the row's ``width`` (CH1's
+    1024 px where a row has none)."""
+    from ..localizer.pipeline import SCORE_REFERENCE_WIDTH_PX
+
+    return float(np.degrees(2 * np.arctan(row.get("width", SCORE_REFERENCE_WIDTH_PX) / (2 * focal_px))))
+
+
+def second_search_rows(rows: list[dict], focal_px: dict[str, float], params=None) -> dict[str, dict]:
+    """{photo: the row that gives what a fov-given answer's second opinion searches}: the photo's ``second`` row
+    (``--fov second``), else its fov-unknown row where that search is the second opinion's to the bit: the photo's
+    given fov (from ``focal_px``, px) within the fov-unknown search's reach (``params``, the photo preset:
+    :func:`~skyrender.localizer.pipeline.fov_within_reach`). A photo with neither has none."""
+    from ..localizer import LocalizeParams
+    from ..localizer.pipeline import fov_within_reach
+
+    params = params or LocalizeParams.for_photos()
+    out = {r["photo"]: r for r in rows if r.get("fov_mode") == "unknown"
+           and r["photo"] in focal_px and fov_within_reach(params, given_fov(r, focal_px[r["photo"]]))}
+    out.update({r["photo"]: r for r in rows if r.get("fov_mode") == "second"})
+    return out
+
+
 def rescore(rows: list[dict], logit: tuple, threshold: float, runner_up_m: float = 1000.0,
-            threshold_fov_unknown: float | None = None, second_opinion: dict | None = None) -> list[dict]:
+            threshold_fov_unknown: float | None = None, second_opinion: dict | None = None,
+            focal_px: dict[str, float] | None = None) -> list[dict]:
     """The rows under another photo confidence (logistic ``logit`` of the margin to the best
     refined pose farther than ``runner_up_m``, :func:`margin_of`, and of the best score,
     :func:`log_best_of`; abstaining below ``threshold``, or
@@ -430,11 +460,11 @@ def rescore(rows: list[dict], logit: tuple, threshold: float, runner_up_m: float
     (:func:`with_part_margins`); a row with poses but none: ValueError. With ``second_opinion`` (a fit's: ``from``,
     ``gain``, ``apart_m``) a fov-given row withheld with at least ``from`` gains ``gain`` where the second search's best
     place lies within ``apart_m`` (:func:`~skyrender.localizer.pipeline.agreed_confidence`): the row's own second opinion,
-    or, where it asked none (a run without abstention), the same photo's fov-unknown row of ``rows`` (what the second
-    search gives, to the bit); with neither, ValueError."""
+    or, where it asked none (a run without abstention), the row of ``rows`` that gives what the second search would
+    (:func:`second_search_rows`; ``focal_px``: the photos' focal lengths, px); with neither, ValueError."""
     from ..localizer.pipeline import agreed_confidence, margin_logistic, uses_part_margin
 
-    unknown = {r["photo"]: r for r in rows if r.get("fov_mode") == "unknown"}
+    second_rows = second_search_rows(rows, focal_px or {})
     out = []
     for r in rows:
         r = dict(r)
@@ -448,11 +478,11 @@ def rescore(rows: list[dict], logit: tuple, threshold: float, runner_up_m: float
                     and second_opinion["from"] <= r["confidence"] < threshold):
                 if r.get("second_opinion"):
                     apart = float(r["second_opinion"]["apart_m"])
-                elif r["photo"] in unknown:
-                    apart = apart_m(r, unknown[r["photo"]])
+                elif r["photo"] in second_rows:
+                    apart = apart_m(r, second_rows[r["photo"]])
                 else:
                     raise ValueError(f"{r['photo']}: asks for a second opinion that the run has not got "
-                                     "(run it with --fov known unknown)")
+                                     "(run it with --fov known unknown, or --fov known second)")
                 if apart <= second_opinion["apart_m"]:
                     r["confidence"] = agreed_confidence(r["confidence"], second_opinion["gain"])
         needed = threshold_fov_unknown if r.get("fov_mode") == "unknown" and threshold_fov_unknown is not None else threshold
@@ -496,7 +526,9 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--side", default="validation", choices=["train", "dev", "validation"])
     parser.add_argument("--limit", type=int, default=0, help="at most N photos, spread over the side's places")
-    parser.add_argument("--fov", nargs="+", default=["known", "unknown"], choices=["known", "unknown"])
+    parser.add_argument("--fov", nargs="+", default=["known", "unknown"], choices=["known", "unknown", "second"],
+                        help="fov modes: given, unknown, and 'second': the search a fov-given answer's second opinion "
+                        "runs (the fov unknown, its range scaled to the given fov beyond the fov-unknown search's reach)")
     parser.add_argument("--unknown-every", type=int, default=1, help="the fov-unknown mode on every K-th photo only")
     parser.add_argument("--out", default=os.path.join(REPO, "experiments", "ch1"))
     parser.add_argument("--photos", nargs="+", default=None, help="these photos of the side only (keys, e.g. ch1/IMG_4922_01024)")
@@ -568,7 +600,9 @@ def main(argv=None) -> int:
             if uses_part_margin(logit):  # rows of runs before the part margin: rendered now
                 with_part_margins(report["photos"], {it.key: it for it in items_on_side(args.side) if it.lat is not None})
             try:
-                report["photos"] = rescore(report["photos"], logit, threshold, runner_up_m, threshold_unknown, second)
+                focal = {it.key: it.focal_px for it in photo_items() if it.focal_px}
+                report["photos"] = rescore(report["photos"], logit, threshold, runner_up_m, threshold_unknown, second,
+                                           focal)
             except ValueError as exc:
                 print(f"--rescore: {exc}")
                 return 2

@@ -21,9 +21,10 @@ constraints, verification; then refinement), the final refinements and
 :func:`_decide`; a search about to abstain goes on in :func:`_before_abstaining` (more
 far-horizon candidates refined, then every far-horizon pose moved to the best of a grid
 around it and the best of those refined) and decides again; with the fov given, an answer still about to be withheld
-may ask :func:`_second_opinion` (the photo searched again with the fov unknown; where both end at one place, the
-answer is given). Real photographs use :meth:`LocalizeParams.for_photos`: far horizons only, a confidence from the
-margin to the runner-up, and the second opinion.
+may ask :func:`_second_opinion` (the photo searched again with the fov unknown, around the given fov where
+the fov-unknown search would not come to it; where both end at one place, the answer is given). Real
+photographs use :meth:`LocalizeParams.for_photos`: far horizons only, a confidence from the margin to the
+runner-up, and the second opinion.
 """
 
 from __future__ import annotations
@@ -264,8 +265,10 @@ class LocalizeParams:
         CH1 photos scaled up 4x were localized in half the time and 9 of 9 right instead of 6
         (``experiments/ch1/search-width/``). With the fov given, an answer withheld with a confidence of at least
         :data:`PHOTO_SECOND_OPINION_FROM` asks a search with the fov unknown, and is given where that search ends
-        within 1 km of it (:func:`_second_opinion`): on the 73 CH1 training-side photos the two agree on 29 of the
-        51 right answers and none of the 22 wrong ones (``experiments/ch1/mode-agreement/``)."""
+        within 1 km of it (:func:`_second_opinion`): on the 73 CH1 training-side photos the two agree on 30 of the
+        51 right answers and none of the 22 wrong ones (``experiments/ch1/mode-agreement/``). For a photo
+        narrower than 27.5 deg that search's fovs are scaled to the given one (:func:`second_opinion_params`;
+        ``experiments/ch1/telephoto-second-opinion/``)."""
         return cls(skyline_method="select", max_hypotheses=0, final_refinements=8, max_refinements=4,
                    max_horizon_refinements=16, escalate_refinements=0, rescore_refinements=0,
                    # fov unknown: 3 coarse fovs and 4 probes instead of 5 and 6 (the refinement fits the focal
@@ -732,7 +735,8 @@ def _second_opinion(search: "_Search", accepted: "_Candidate | None", result: Lo
     best, _ = _best_refined(search, accepted)  # the answer _decide withheld (its confidence is the result's)
     other = LocalizeStats()
     second, second_accepted, _ = _search_and_decide(photo, search.model, search.terrain, search.height, None, prior,
-                                                    params, other, search.curvature, search.solver, time.perf_counter())
+                                                    second_opinion_params(params, search.fov), other, search.curvature,
+                                                    search.solver, time.perf_counter())
     second_best, _ = _best_refined(second, second_accepted)
     withheld = replace(result, seconds=time.perf_counter() - t_start)  # the second search's time counted
     if best is None or second_best is None:
@@ -747,6 +751,28 @@ def _second_opinion(search: "_Search", accepted: "_Candidate | None", result: Lo
     if confidence < params.abstain_below(False):
         return replace(withheld, confidence=confidence)
     return _localized(search, best, confidence, t_start)
+
+
+def fov_within_reach(params: LocalizeParams, fov: float) -> bool:
+    """Whether the search with the fov unknown (``params.fov_candidates``, then ``params.horizon_fov_step`` around
+    the best: probes in degrees) can come to the horizontal fov ``fov`` (deg): from the smallest coarse fov less
+    every step to the largest plus them (the photo preset's 27.5-72.5 deg)."""
+    fovs, reach = tuple(params.fov_candidates), float(sum(params.horizon_fov_step))
+    return min(fovs) - reach <= fov <= max(fovs) + reach
+
+
+def second_opinion_params(params: LocalizeParams, fov: float) -> LocalizeParams:
+    """The parameters of the second opinion's search (:func:`_second_opinion`, the fov unknown) for a photo whose
+    horizontal fov ``fov`` (deg) was given: ``params`` where that search reaches it (:func:`fov_within_reach`);
+    else its coarse fovs and probe steps scaled by ``fov`` over the middle coarse fov, so that it spans the given
+    fov as it spans the middle one. A search that never comes to the photo's fov cannot agree with its answer: the
+    photo preset's 35 / 50 / 65 deg never come below 27.5 deg, and a third of CH1's validation photos are
+    10.6-28 deg wide (a 19.5-deg photo is searched at 13.65 / 19.5 / 25.35 deg, probes 1.95 and 0.975 deg)."""
+    if fov_within_reach(params, fov):
+        return params
+    scale = fov / sorted(params.fov_candidates)[len(params.fov_candidates) // 2]
+    return replace(params, fov_candidates=tuple(f * scale for f in params.fov_candidates),
+                   horizon_fov_step=tuple(s * scale for s in params.horizon_fov_step))
 
 
 def agreed_confidence(confidence: float, gain: float) -> float:

@@ -54,6 +54,7 @@ from ..benchmarks.real_localize import (
     model_overrides,
     places_of,
     run,
+    second_search_rows,
     with_part_margins,
 )
 from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
@@ -341,7 +342,8 @@ def main(argv=None) -> int:
         for path in paths:
             try:
                 with open(path) as f:
-                    read += [r for r in json.load(f)["photos"] if r["fov_mode"] == "unknown"]
+                    modes = ("unknown",) if option == "--fov-unknown-rows" else ("unknown", "second")
+                    read += [r for r in json.load(f)["photos"] if r["fov_mode"] in modes]
             except (OSError, ValueError, KeyError) as exc:
                 print(f"{option}: cannot read {path}: {exc}")
                 return 2
@@ -396,7 +398,16 @@ def main(argv=None) -> int:
         out["fov_unknown_rows"] = {"files": [os.path.relpath(p, REPO) for p in args.fov_unknown_rows],
                                    "photos": len(unknown_rows)}
     if second_rows:
-        out["second_opinion"] = fit_second_opinion(rows, second_rows, out["logit"], out["runner_up_m"],
+        # what each photo's second opinion searches: a fov-unknown row, or a "second" row where the given fov lies
+        # beyond the fov-unknown search's reach (real_localize.second_search_rows)
+        focal = {it.key: it.focal_px for side in ("train", "dev") for it in items_on_side(side) if it.focal_px}
+        searched = second_search_rows(second_rows, focal)
+        missing = sorted(r["photo"] for r in rows if r["photo"] not in searched)
+        if missing:
+            print(f"--second-opinion-rows: no row of the second opinion's search for {' '.join(missing)} (their fov lies "
+                  "beyond the fov-unknown search's reach: real_localize --fov second)")
+            return 2
+        out["second_opinion"] = fit_second_opinion(rows, list(searched.values()), out["logit"], out["runner_up_m"],
                                                    out["min_confidence"])
         out["second_opinion"]["files"] = [os.path.relpath(p, REPO) for p in args.second_opinion_rows]
     with open(args.out, "w") as f:
