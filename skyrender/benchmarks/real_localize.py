@@ -649,6 +649,8 @@ def main(argv=None) -> int:
         head = f"commit {report['commit']}, {report['cpus']} CPUs, side {args.side}"
         if "overrides" in report:
             head += f"; photo preset with {json.dumps(report['overrides'])}"
+        if "merged" in report:  # modes from two runs (one mode's code unchanged between them)
+            head += "; rows merged: " + "; ".join(f"{mode}: {where}" for mode, where in report["merged"].items())
         if "rescored" in report:
             rs = report["rescored"]
             head += (f"; confidences rescored at {rs['at']} (logit {logit_text(rs['logit'])}, "
