@@ -1071,6 +1071,10 @@ def test_an_agreed_answer_s_logit_gains_the_fitted_gain_and_the_fit_holds_no_wro
     seconds = [dict(u, fov_mode="second") for u in unknown_runs]  # real_localize --fov second: the scaled search
     out = rescore(runs + unknown_runs + seconds, logit, 0.95, 1000.0, 0.95, second, narrow)
     assert out[0]["status"] == "localized" and out[1]["status"] == "abstained"
+    # a "second" row is a search with the fov unknown: rescored with that mode's threshold
+    answered = [dict(u, status="localized", error_m=1.0) for u in seconds]
+    out = rescore(answered, logit, 0.95, 1000.0, 0.0, None, narrow)
+    assert [r["status"] for r in out] == ["localized", "localized"]
 
 
 def test_a_second_opinion_searches_a_range_scaled_to_a_given_fov_the_fov_unknown_search_does_not_reach(

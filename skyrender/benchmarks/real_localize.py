@@ -485,7 +485,8 @@ def rescore(rows: list[dict], logit: tuple, threshold: float, runner_up_m: float
                                      "(run it with --fov known unknown, or --fov known second)")
                 if apart <= second_opinion["apart_m"]:
                     r["confidence"] = agreed_confidence(r["confidence"], second_opinion["gain"])
-        needed = threshold_fov_unknown if r.get("fov_mode") == "unknown" and threshold_fov_unknown is not None else threshold
+        fov_free = r.get("fov_mode") in ("unknown", "second")  # a "second" row is a search with the fov unknown too
+        needed = threshold_fov_unknown if fov_free and threshold_fov_unknown is not None else threshold
         if r["status"] == "localized" and r["confidence"] < needed:
             r["status"], r["withheld_error_m"] = "abstained", r.pop("error_m")
         elif r["status"] != "localized" and r["confidence"] >= needed and "withheld_error_m" in r:
