@@ -395,7 +395,7 @@ def test_column_weights_and_the_recall_rank_of_the_diagnostic():
 
 def test_bench_real_retables_a_run_of_one_fov_mode(tmp_path):
     """``--retable`` of a run made with ``--fov unknown`` only summarises that mode (it raised on
-    the empty known-fov summary)."""
+    the empty known-fov summary); a report of rows merged from two runs says so in its header."""
     from skyrender.benchmarks.real_localize import main
 
     data_path("photos", "ch1")
@@ -407,6 +407,13 @@ def test_bench_real_retables_a_run_of_one_fov_mode(tmp_path):
     text = (tmp_path / "bench-real-validation-t.txt").read_text()
     assert "unknown fov: 2 photos; within 100 m 0 %, 250 m 50 %, 1 km 100 %" in text
     assert "\nknown fov" not in text
+    # rows merged from two runs (one mode's code unchanged between them): the header says where each came from
+    with open(tmp_path / "bench-real-validation-t.json", "w") as f:
+        json.dump({"commit": "abc", "cpus": 2, "side": "validation", "photos": rows,
+                   "merged": {"fov unknown": "the run at def"}}, f)
+    assert main(["--side", "validation", "--tag", "t", "--out", str(tmp_path), "--retable"]) == 0
+    head = (tmp_path / "bench-real-validation-t.txt").read_text().splitlines()[0]
+    assert head == "commit abc, 2 CPUs, side validation; rows merged: fov unknown: the run at def"
 
 
 def test_bench_real_rescores_a_run_under_another_fit_and_refuses_a_bad_one(tmp_path, capsys):
