@@ -166,7 +166,7 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
             t = time.perf_counter()
             image = load_photo(it.image_path)
             skyline = true_extraction(it, image.shape[0]) if true_skyline else extract_skyline(image, params.skyline_params())
-            given = float(np.degrees(2 * np.arctan(image.shape[1] / (2 * it.focal_px))))
+            given = given_fov(image.shape[1], it.focal_px)
             # "second": the search a fov-given answer's second opinion runs (the fov unknown, its range scaled to the
             # given fov where the fov-unknown search does not reach it), for fitting the second opinion
             run_params = second_opinion_params(params, given) if mode == "second" else params
@@ -423,25 +423,24 @@ def logit_text(logit) -> str:
     return text
 
 
-def given_fov(row: dict, focal_px: float) -> float:
-    """The horizontal fov (deg) a row's photo is given: from its focal length (px) at the row's ``width`` (CH1's
-    1024 px where a row has none)."""
-    from ..localizer.pipeline import SCORE_REFERENCE_WIDTH_PX
-
-    return float(np.degrees(2 * np.arctan(row.get("width", SCORE_REFERENCE_WIDTH_PX) / (2 * focal_px))))
+def given_fov(width: float, focal_px: float) -> float:
+    """The horizontal fov (deg) a photo ``width`` px wide is given with its focal length (px): what the benchmark
+    localizes it with in the fov-known mode."""
+    return float(np.degrees(2 * np.arctan(width / (2 * focal_px))))
 
 
 def second_search_rows(rows: list[dict], focal_px: dict[str, float], params=None) -> dict[str, dict]:
     """{photo: the row that gives what a fov-given answer's second opinion searches}: the photo's ``second`` row
     (``--fov second``), else its fov-unknown row where that search is the second opinion's to the bit: the photo's
-    given fov (from ``focal_px``, px) within the fov-unknown search's reach (``params``, the photo preset:
+    given fov (:func:`given_fov`, from ``focal_px``, px, at the row's ``width``, CH1's 1024 px where it has none)
+    within the fov-unknown search's reach (``params``, the photo preset:
     :func:`~skyrender.localizer.pipeline.fov_within_reach`). A photo with neither has none."""
     from ..localizer import LocalizeParams
-    from ..localizer.pipeline import fov_within_reach
+    from ..localizer.pipeline import SCORE_REFERENCE_WIDTH_PX, fov_within_reach
 
     params = params or LocalizeParams.for_photos()
-    out = {r["photo"]: r for r in rows if r.get("fov_mode") == "unknown"
-           and r["photo"] in focal_px and fov_within_reach(params, given_fov(r, focal_px[r["photo"]]))}
+    out = {r["photo"]: r for r in rows if r.get("fov_mode") == "unknown" and r["photo"] in focal_px
+           and fov_within_reach(params, given_fov(r.get("width", SCORE_REFERENCE_WIDTH_PX), focal_px[r["photo"]]))}
     out.update({r["photo"]: r for r in rows if r.get("fov_mode") == "second"})
     return out
 

@@ -13,13 +13,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from skyrender.benchmarks.real_localize import with_place
+from skyrender.benchmarks.real_localize import photo_skyline, with_place
 from skyrender.camera import Intrinsics
 from skyrender.datasets.real_photos import items_on_side
-from skyrender.features import extract_skyline, load_photo
 from skyrender.localizer import LocalizeParams
 from skyrender.localizer.horizon_search import horizon_poses, standable_centres
-from skyrender.localizer.pipeline import column_weights
 
 params = LocalizeParams.for_photos()
 variants = {"shipped": params.horizon}
@@ -29,10 +27,8 @@ for spec in sys.argv[2:]:
 items = [i for s in sys.argv[1].split(",") for i in items_on_side(s) if i.key.startswith("ch1/")]
 out = []
 for n, it, (dem, terrain, model) in with_place(items, None):
-    image = load_photo(it.image_path)
+    image, sky, w = photo_skyline(it, params)
     H, W = image.shape[:2]
-    ex = extract_skyline(image, params.skyline_params())
-    sky, w = ex.skyline, column_weights(ex.confidence, params.confidence_power)
     k = Intrinsics(W, H, it.focal_px, W / 2, H / 2)
     tx, ty = (float(v) for v in dem.from_lonlat(it.lon, it.lat))
     rec = {"photo": it.key}

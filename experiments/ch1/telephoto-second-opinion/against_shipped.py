@@ -30,7 +30,7 @@ def main() -> None:
     within = 0
     for key, r in new.items():
         o = old[key]
-        fov = given_fov(r, focal[key])
+        fov = given_fov(r["width"], focal[key])
         reach = fov_within_reach(photo, fov)
         within += reach
         poses_same = r["refined_poses"] == o["refined_poses"]
