@@ -49,6 +49,30 @@ def recall(position_error_m: np.ndarray, thresholds_m=RECALL_M) -> dict[float, f
     return {float(m): float(np.mean(ok & (np.where(ok, err, np.inf) <= m))) for m in thresholds_m}
 
 
+def place_interval(values, places, *, level: float = 0.95, resamples: int = 2000, seed: int = 0) -> tuple[float, float]:
+    """Bootstrap interval (percentile, ``level``) of the mean of per-photo ``values`` (a 0/1 outcome or a share)
+    when whole places are resampled: photos of one place succeed or fail together (one CH1 validation place holds
+    27 of the 60 photos), so resampling photos alone would give an interval far too narrow. Each resample draws as
+    many places as there are, with replacement, and pools their photos. Deterministic for a seed; (mean, mean) with
+    fewer than two places. ``places``: one label per value (any hashable)."""
+    from scipy.stats import bootstrap
+
+    v = np.asarray(values, np.float64)
+    labels, index = np.unique(np.asarray(places), return_inverse=True)
+    if len(labels) < 2:
+        return float(v.mean()), float(v.mean())
+    sums = np.bincount(index, weights=v, minlength=len(labels))
+    counts = np.bincount(index, minlength=len(labels)).astype(np.float64)
+
+    def pooled_mean(drawn, axis=-1):
+        drawn = drawn.astype(np.intp)
+        return sums[drawn].sum(axis=axis) / counts[drawn].sum(axis=axis)
+
+    ci = bootstrap((np.arange(len(labels)),), pooled_mean, n_resamples=resamples, vectorized=True,
+                   method="percentile", confidence_level=level, rng=np.random.default_rng(seed)).confidence_interval
+    return float(ci.low), float(ci.high)
+
+
 def _stats(values: np.ndarray) -> dict:
     v = np.asarray(values, float)
     v = v[np.isfinite(v)]

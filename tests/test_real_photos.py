@@ -494,6 +494,52 @@ def test_a_benchmark_run_says_how_often_each_confidence_was_right():
     assert "known fov calibration" in text and "0.99: 2, 1.00, 0.50" in text and f"Brier {cal['brier']:.3f}" in text
 
 
+def test_a_recall_interval_resamples_whole_places_not_photos():
+    """``evaluate.place_interval``: photos of one place succeed or fail together, so the interval over places is wider
+    than the one over photos of the same outcomes; it holds the observed share, is the same for the same seed, and
+    is the share itself with one place or one outcome. ``real_localize.place_intervals`` gives it per recall radius, and the table
+    prints it."""
+    from skyrender.benchmarks.real_localize import place_intervals, table
+    from skyrender.evaluate import place_interval
+
+    outcome = np.r_[np.ones(20), np.zeros(4), np.ones(3), np.zeros(13)]  # a place of 20 found, others mostly not
+    places = np.r_[np.zeros(20), np.repeat(np.arange(1, 6), 4)]
+    lo, hi = place_interval(outcome, places)
+    photo_lo, photo_hi = place_interval(outcome, np.arange(len(outcome)))
+    assert lo <= outcome.mean() <= hi and photo_lo <= outcome.mean() <= photo_hi
+    assert hi - lo > 1.5 * (photo_hi - photo_lo)  # resampling photos alone would claim far too much
+    assert place_interval(outcome, places) == (lo, hi)
+    assert place_interval(outcome, np.zeros(len(outcome))) == (outcome.mean(), outcome.mean())
+    assert place_interval(np.ones(6), [0, 0, 1, 1, 2, 2]) == (1.0, 1.0)
+
+    rows = [{"photo": f"p{i}", "error_m": 50.0 if i < 10 else 600.0} for i in range(16)] + [{"photo": "q", "status": "abstained"}]
+    place_of = {f"p{i}": ("a" if i < 10 else f"b{i}") for i in range(16)}
+    ci = place_intervals(rows, place_of)
+    assert ci["places"] == 8 and ci["recall_1000m"][0] < 16 / 17 <= ci["recall_1000m"][1]
+    assert ci["recall_100m"][0] <= 10 / 17 <= ci["recall_100m"][1] and ci["recall_100m"][1] - ci["recall_100m"][0] > 0.3
+    text = table({"photos": [], "summary": {}, "intervals": {"known": ci}})
+    assert "known fov, 95 % interval with the 8 places resampled whole: within 100 m" in text
+
+
+def test_the_extractor_benchmark_gives_its_shares_with_intervals_over_places():
+    """``skyline_photos.summary`` with the photos' places: a CH1 place's photos are resampled together, a photo
+    without a place (a Web photo) alone; without places, no interval."""
+    from skyrender.benchmarks.skyline_photos import summary
+
+    def row(key, median, within5):
+        return {"photo": key, "m": {"median": median, "within5": within5, "seconds": 0.5}}
+
+    rows = [row(f"ch1/a{i}", 0.5, 1.0) for i in range(8)] + [row(f"ch1/b{i}", 3.0, 0.7) for i in range(4)] + \
+        [row("web/w1", 0.4, 0.99), row("web/w2", 9.0, 0.2)]
+    place_of = {**{f"ch1/a{i}": "ch1/place01" for i in range(8)}, **{f"ch1/b{i}": "ch1/place02" for i in range(4)}}
+    s = summary(rows, "m", place_of)
+    assert s["met"] == 9 and s["places"] == 4
+    lo, hi = s["met_share_interval"]
+    assert lo < 9 / 14 < hi and hi - lo > 0.3
+    assert s["mean_within5_interval"][0] < s["mean_within5"] < s["mean_within5_interval"][1]
+    assert "met_share_interval" not in summary(rows, "m")
+
+
 def test_an_extractor_run_is_compared_with_the_committed_benchmark_photo_by_photo():
     """``skyline_photos.unchanged_report``: the identity check after a change counts the photos whose median
     and share within 5 px are the committed ones, and names each that moved."""

@@ -25,9 +25,9 @@ import time
 
 import numpy as np
 
-from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side, photo_items
+from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side, photo_items, split_places
 from ..diagnostics.oracle import DEM_DIR, tiles_around
-from ..evaluate import git_commit, position_errors
+from ..evaluate import git_commit, place_interval, position_errors
 
 HALF_LAT, HALF_LON = 0.6, 0.7  # degrees either side of the place's centre
 RECALL_M = (100.0, 250.0, 1000.0)
@@ -37,12 +37,6 @@ def place_window(lat: float, lon: float) -> tuple[float, float, float, float]:
     """(west, south, east, north) degrees of the search area around a place."""
     clat, clon = round(lat, 1), round(lon, 1)
     return clon - HALF_LON, clat - HALF_LAT, clon + HALF_LON, clat + HALF_LAT
-
-
-def split_places() -> dict[str, str]:
-    """``{photo key: place}`` of the committed split (``experiments/photos/split.json``)."""
-    with open(os.path.join(REPO, "experiments", "photos", "split.json")) as f:
-        return {k: v["place"] for k, v in json.load(f)["photos"].items()}
 
 
 def places_of(items) -> tuple[dict[str, str], dict[str, tuple[float, float]]]:
@@ -253,6 +247,18 @@ def by_place(rows: list[dict], place_of: dict[str, str]) -> dict[str, dict]:
         p["within_250m"] += int(err <= 250.0)
         p["within_1000m"] += int(err <= 1000.0)
     return dict(sorted(out.items()))
+
+
+def place_intervals(rows: list[dict], place_of: dict[str, str], level: float = 0.95) -> dict:
+    """How far the recall of ``rows`` (one fov mode) could move with other places of the same kind: for each radius
+    of :data:`RECALL_M`, the :func:`~skyrender.evaluate.place_interval` of the share answered within it, the places
+    (``place_of``; a photo it lacks is a place of its own) resampled whole."""
+    hit = np.array([r.get("error_m", np.inf) for r in rows], np.float64)
+    labels = [place_of.get(r["photo"], r["photo"]) for r in rows]
+    out = {"level": level, "places": len(set(labels))}
+    for m in RECALL_M:
+        out[f"recall_{int(m)}m"] = list(place_interval(hit <= m, labels, level=level)) if rows else None
+    return out
 
 
 def refined_of(row: dict, max_slope_deg: float | None = None) -> np.ndarray:
@@ -509,6 +515,11 @@ def table(report: dict) -> str:
                      f"{100 * s['recall_250m']:.0f} %, 1 km {100 * s['recall_1000m']:.0f} %; abstained {s['abstained']}; "
                      f"confident and > 1 km wrong {s['wrong_over_1km']}; median {s['median_seconds']:.1f} s"
                      + (f"; withheld but within 1 km {s['withheld_within_1km']}" if s.get("withheld_within_1km") else ""))
+    for m, ci in report.get("intervals", {}).items():
+        if ci.get("recall_1000m"):
+            lines.append(f"{m} fov, {100 * ci['level']:.0f} % interval with the {ci['places']} places resampled whole: "
+                         + ", ".join(f"within {label} {100 * ci[key][0]:.0f}-{100 * ci[key][1]:.0f} %" for label, key in
+                                     (("100 m", "recall_100m"), ("250 m", "recall_250m"), ("1 km", "recall_1000m"))))
     for m, cal in report.get("calibration", {}).items():
         if cal["photos"]:
             lines.append(f"{m} fov calibration (every answer, given or withheld; confidence from: photos, mean confidence, "
@@ -640,6 +651,8 @@ def main(argv=None) -> int:
     place_of = split_places()
     report["by_place"] = {m: by_place([r for r in report["photos"] if r["fov_mode"] == m], place_of) for m in modes}
     report["calibration"] = {m: calibration([r for r in report["photos"] if r["fov_mode"] == m]) for m in modes}
+    report["intervals"] = {m: place_intervals([r for r in report["photos"] if r["fov_mode"] == m], place_of)
+                           for m in modes}
     text = table(report)
     print(text)
     os.makedirs(args.out, exist_ok=True)

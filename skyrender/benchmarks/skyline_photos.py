@@ -26,8 +26,8 @@ import time
 
 import numpy as np
 
-from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
-from ..evaluate import git_commit
+from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side, split_places
+from ..evaluate import git_commit, place_interval
 
 TARGET_MEDIAN_PX, TARGET_WITHIN5 = 2.0, 0.95
 GOAL_SHARE, GOAL_MEAN, GOAL_FLOOR = 0.90, 0.97, 0.60  # issue 18: on photos not used for fitting
@@ -132,13 +132,22 @@ def evaluate(items, methods: list[str], progress: bool = True) -> list[dict]:
     return rows
 
 
-def summary(rows: list[dict], method: str) -> dict:
+def summary(rows: list[dict], method: str, place_of: dict[str, str] | None = None) -> dict:
+    """A method's figures over ``rows``; with ``place_of`` (photo key -> place, :func:`split_places`; a photo it
+    lacks is a place of its own) also the 95 % intervals of the share meeting the target and of the mean share within
+    5 px with the places resampled whole (:func:`~skyrender.evaluate.place_interval`)."""
     w = np.array([r[method]["within5"] for r in rows])
     med = np.array([r[method]["median"] for r in rows])
     sec = np.array([r[method]["seconds"] for r in rows])
     met = np.array([meets_target(a, b) for a, b in zip(med, w)])
-    return {"photos": len(rows), "met": int(met.sum()), "met_share": float(met.mean()), "mean_within5": float(w.mean()),
-            "min_within5": float(w.min()), "median_seconds": float(np.median(sec)), "max_seconds": float(sec.max())}
+    out = {"photos": len(rows), "met": int(met.sum()), "met_share": float(met.mean()), "mean_within5": float(w.mean()),
+           "min_within5": float(w.min()), "median_seconds": float(np.median(sec)), "max_seconds": float(sec.max())}
+    if place_of is not None:
+        labels = [place_of.get(r["photo"], r["photo"]) for r in rows]
+        out["places"] = len(set(labels))
+        out["met_share_interval"] = list(place_interval(met, labels))
+        out["mean_within5_interval"] = list(place_interval(w, labels))
+    return out
 
 
 def unchanged_report(now: dict, bench: dict, sides=("validation", "heldout"), method: str = "select") -> str:
@@ -262,13 +271,14 @@ def main(argv=None) -> int:
         return 2
     report = {"commit": git_commit(), "cpus": os.cpu_count(), "methods": args.methods, "sides": {}}
     text = []
+    place_of = split_places()
     for side in args.sides:
         items = items_on_side(side, args.data)
         if args.limit:
             items = items[: args.limit]
         print(f"{side}: {len(items)} photos", flush=True)
         rows = evaluate(items, args.methods)
-        sums = {m: summary(rows, m) for m in args.methods}
+        sums = {m: summary(rows, m, place_of) for m in args.methods}
         conf = confidence_summary(rows)
         report["sides"][side] = {"photos": rows, "summary": sums, "confidence": conf}
         text.append(f"## {side} ({len(rows)} photos)\n\n{format_table(rows, args.methods)}\n")
@@ -277,6 +287,9 @@ def main(argv=None) -> int:
                         f"on {s['met']} of {s['photos']} ({100 * s['met_share']:.0f} %); mean within 5 px "
                         f"{100 * s['mean_within5']:.1f} %; lowest {100 * s['min_within5']:.1f} %; seconds median "
                         f"{s['median_seconds']:.2f}, max {s['max_seconds']:.2f}")
+            text.append(f"       95 % interval with the {s['places']} places resampled whole: target met "
+                        f"{100 * s['met_share_interval'][0]:.0f}-{100 * s['met_share_interval'][1]:.0f} %, mean within 5 px "
+                        f"{100 * s['mean_within5_interval'][0]:.1f}-{100 * s['mean_within5_interval'][1]:.1f} %")
         if conf:
             text.append(f"confidence >= {CONFIDENT}: {conf['confident_columns']} columns, "
                         f"{100 * conf['confident_within5']:.1f} % within 5 px (median {conf['confident_median_px']:.2f} px); "

@@ -178,6 +178,13 @@ def load_split(path: str = SPLIT_FILE) -> dict[str, str]:
         return {k: v["side"] for k, v in json.load(f)["photos"].items()}
 
 
+def split_places(path: str = SPLIT_FILE) -> dict[str, str]:
+    """``{key: place}`` from the committed split file: a CH1 photo's place (``ch1/placeNN``: cameras chained within
+    :data:`PLACE_LINK_KM`), each Web or GeoPose3K photo a place of its own (they have no positions)."""
+    with open(path) as f:
+        return {k: v["place"] for k, v in json.load(f)["photos"].items()}
+
+
 def items_on_side(side: str, data_dir: str = DEFAULT_PHOTOS, split_path: str = SPLIT_FILE) -> list[PhotoItem]:
     """The photos of one side of the committed split that exist under ``data_dir``."""
     split = load_split(split_path)
