@@ -540,6 +540,33 @@ def test_the_extractor_benchmark_gives_its_shares_with_intervals_over_places():
     assert "met_share_interval" not in summary(rows, "m")
 
 
+def test_bench_skyline_retables_a_run_with_the_intervals(tmp_path):
+    """``bench-skyline --retable`` rewrites a run's text from its JSON, the summaries made again with the places'
+    intervals (a run from before them gains them), and refuses a folder without a run, with exit status 2."""
+    import json
+
+    from skyrender.benchmarks.skyline_photos import main
+
+    def row(key, within5):
+        return {"photo": key, "width": 1024, "height": 768, "unseen": 0.0,
+                "select": {"median": 0.5 if within5 > 0.95 else 4.0, "within5": within5, "seconds": 0.8}}
+
+    timing = {"seconds": 0.8, "width": 1024, "height": 768, "median_px_at_1024": 0.5}
+    report = {"commit": "abc", "cpus": 2, "methods": ["select"],
+              "sides": {"validation": {"photos": [row("ch1/a", 1.0), row("ch1/b", 0.5), row("web_train/web050", 1.0)],
+                                       "summary": {}, "confidence": None}},
+              "speed": {"method": "select", "photo": "ch1/a", "1024": timing, "12mp": {**timing, "width": 4096}},
+              "mixture_fit": {"photo": "ch1/a", "samples": 12000, "ours": {"seconds": 0.05},
+                              "scikit_learn": {"seconds": 0.15}, "max_mean_difference": 1e-12}}
+    (tmp_path / "bench-skyline.json").write_text(json.dumps(report))
+    assert main(["--retable", "--out", str(tmp_path)]) == 0
+    text = (tmp_path / "bench-skyline.txt").read_text()
+    assert "met on 2 of 3 (67 %)" in text and "95 % interval with the 3 places resampled whole: target met" in text
+    stored = json.loads((tmp_path / "bench-skyline.json").read_text())
+    assert stored["sides"]["validation"]["summary"]["select"]["places"] == 3
+    assert main(["--retable", "--out", str(tmp_path / "none")]) == 2
+
+
 def test_an_extractor_run_is_compared_with_the_committed_benchmark_photo_by_photo():
     """``skyline_photos.unchanged_report``: the identity check after a change counts the photos whose median
     and share within 5 px are the committed ones, and names each that moved."""

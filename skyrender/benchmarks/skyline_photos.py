@@ -265,12 +265,21 @@ def main(argv=None) -> int:
     parser.add_argument("--methods", nargs="+", default=["select", "hybrid", "net", "gmm", "otsu"])
     parser.add_argument("--limit", type=int, default=0, help="at most this many photos per side (0: all)")
     parser.add_argument("--out", default=os.path.join(REPO, "experiments", "photos"))
+    parser.add_argument("--retable", action="store_true",
+                        help="rewrite the text (and the summaries) of the run in OUT/bench-skyline.json without extracting")
     args = parser.parse_args(argv)
+    if args.retable:
+        try:
+            with open(os.path.join(args.out, "bench-skyline.json")) as f:
+                report = json.load(f)
+        except (OSError, ValueError) as exc:
+            print(f"--retable: cannot read {os.path.join(args.out, 'bench-skyline.json')}: {exc}")
+            return 2
+        return _write(report, report_text(report), args.out)
     if not os.path.isdir(args.data):
         print(f"no photos at {args.data}")
         return 2
     report = {"commit": git_commit(), "cpus": os.cpu_count(), "methods": args.methods, "sides": {}}
-    text = []
     place_of = split_places()
     for side in args.sides:
         items = items_on_side(side, args.data)
@@ -278,10 +287,27 @@ def main(argv=None) -> int:
             items = items[: args.limit]
         print(f"{side}: {len(items)} photos", flush=True)
         rows = evaluate(items, args.methods)
-        sums = {m: summary(rows, m, place_of) for m in args.methods}
-        conf = confidence_summary(rows)
-        report["sides"][side] = {"photos": rows, "summary": sums, "confidence": conf}
-        text.append(f"## {side} ({len(rows)} photos)\n\n{format_table(rows, args.methods)}\n")
+        report["sides"][side] = {"photos": rows, "summary": {m: summary(rows, m, place_of) for m in args.methods},
+                                 "confidence": confidence_summary(rows)}
+    report["speed"] = speed(items_on_side("validation", args.data) or items_on_side("train", args.data), args.methods[0])
+    report["mixture_fit"] = mixture_fit_speed(items_on_side("validation", args.data) or items_on_side("train", args.data))
+    for r in report["sides"].values():  # column lists are for the summary only
+        for p in r["photos"]:
+            p.pop("errors_confident", None)
+            p.pop("errors_doubtful", None)
+    return _write(report, report_text(report), args.out)
+
+
+def report_text(report: dict) -> str:
+    """The tables and summary lines of a run (``report``: what :func:`main` writes to ``bench-skyline.json``); the
+    summaries are made again from the rows, with the places' intervals (so an older run's text gains them)."""
+    methods, text = report["methods"], []
+    place_of = split_places()
+    for side, data in report["sides"].items():
+        rows = data["photos"]
+        sums = data["summary"] = {m: summary(rows, m, place_of) for m in methods}
+        conf = data.get("confidence")
+        text.append(f"## {side} ({len(rows)} photos)\n\n{format_table(rows, methods)}\n")
         for m, s in sums.items():
             text.append(f"{m:5s}: target (median <= {TARGET_MEDIAN_PX} px and >= {100 * TARGET_WITHIN5:.0f} % within 5 px) met "
                         f"on {s['met']} of {s['photos']} ({100 * s['met_share']:.0f} %); mean within 5 px "
@@ -297,29 +323,25 @@ def main(argv=None) -> int:
                         + (f"{100 * conf['doubtful_within5']:.1f} % within 5 px (median {conf['doubtful_median_px']:.2f} px)"
                            if conf["doubtful_columns"] else "none"))
         text.append("")
-    sp = speed(items_on_side("validation", args.data) or items_on_side("train", args.data), args.methods[0])
-    report["speed"] = sp
+    sp, fits = report["speed"], report["mixture_fit"]
     text.append(f"speed of {sp['method']} ({sp['photo']}, median of 3): {sp['1024']['width']} x {sp['1024']['height']}: "
                 f"{sp['1024']['seconds']:.2f} s; {sp['12mp']['width']} x {sp['12mp']['height']} (12.6 MP): "
                 f"{sp['12mp']['seconds']:.2f} s, median error {sp['12mp']['median_px_at_1024']:.2f} px at 1024 scale "
                 f"({sp['1024']['median_px_at_1024']:.2f} px on the 1024 original)")
-    fits = mixture_fit_speed(items_on_side("validation", args.data) or items_on_side("train", args.data))
-    report["mixture_fit"] = fits
     text.append(f"colour mixture fit ({fits['photo']}, {fits['samples']} samples, median of 3): "
                 f"{fits['ours']['seconds']:.3f} s against scikit-learn's GaussianMixture "
                 f"{fits['scikit_learn']['seconds']:.3f} s ({fits['scikit_learn']['seconds'] / fits['ours']['seconds']:.1f}x), "
                 f"means apart by at most {fits['max_mean_difference']:.1e}")
-    out = "\n".join(text)
-    print(out)
-    os.makedirs(args.out, exist_ok=True)
-    for r in report["sides"].values():  # column lists are for the summary only
-        for p in r["photos"]:
-            p.pop("errors_confident", None)
-            p.pop("errors_doubtful", None)
-    with open(os.path.join(args.out, "bench-skyline.json"), "w") as f:
+    return "\n".join(text)
+
+
+def _write(report: dict, text: str, out_dir: str) -> int:
+    print(text)
+    os.makedirs(out_dir, exist_ok=True)
+    with open(os.path.join(out_dir, "bench-skyline.json"), "w") as f:
         json.dump(report, f, indent=1)
-    with open(os.path.join(args.out, "bench-skyline.txt"), "w") as f:
-        f.write(f"commit {report['commit']}, {report['cpus']} CPUs\n\n{out}\n")
+    with open(os.path.join(out_dir, "bench-skyline.txt"), "w") as f:
+        f.write(f"commit {report['commit']}, {report['cpus']} CPUs\n\n{text}\n")
     return 0
 
 
