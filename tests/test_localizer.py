@@ -491,7 +491,7 @@ def test_far_horizon_search_over_tilts_finds_a_camera_looking_up(scene, views):
 
 
 def test_photo_confidence_is_a_logistic_of_the_margin_to_the_runner_up():
-    from skyrender.localizer.pipeline import margin_confidence
+    from skyrender.localizer.confidence import margin_confidence
 
     assert margin_confidence(1.0, 2.0, (0.0, 1.0)) == pytest.approx(1.0 / (1.0 + np.exp(-0.5)))
     assert margin_confidence(1.0, np.inf, (-2.0, 4.0)) == pytest.approx(1.0 / (1.0 + np.exp(-2.0)))  # no runner-up
@@ -530,7 +530,7 @@ def test_the_part_margin_finds_a_look_alike_that_wins_on_one_part_only():
 
 
 def test_the_answers_part_margin_is_rendered_against_the_other_distinct_places(view_terrain, valley_view):
-    from skyrender.localizer.pipeline import answer_part_margin, distinct_places, margin_logistic, uses_part_margin
+    from skyrender.localizer.confidence import answer_part_margin, distinct_places, margin_logistic, uses_part_margin
     from skyrender.render import render_skylines
 
     pose, K = valley_view
@@ -573,7 +573,7 @@ def test_a_benchmark_run_is_rescored_under_another_confidence_without_moving_a_p
 
 
 def test_the_runner_up_is_the_best_pose_beyond_the_distance():
-    from skyrender.localizer.pipeline import runner_up_index
+    from skyrender.localizer.confidence import runner_up_index
 
     xy = np.array([[0.0, 0.0], [500.0, 0.0], [0.0, 2500.0], [4000.0, 0.0]])
     scores = np.array([1.0, 1.05, 1.2, 1.5])
@@ -999,7 +999,7 @@ def test_a_fov_given_answer_about_to_be_withheld_is_given_where_a_search_with_th
     the stats; where they do not, the abstention stands, with the second place kept; below the floor none is asked."""
     from dataclasses import replace
 
-    from skyrender.localizer.pipeline import agreed_confidence
+    from skyrender.localizer.confidence import agreed_confidence
 
     _, terrain, model = scene
     pose = views.poses[4]
@@ -1030,7 +1030,7 @@ def test_an_agreed_answer_s_logit_gains_the_fitted_gain_and_the_fit_holds_no_wro
     row withheld above the floor, and never one below it or one not agreed with; a rescore applies it from a row's
     own second opinion or the run's fov-unknown row of the photo."""
     from skyrender.benchmarks.real_localize import rescore
-    from skyrender.localizer.pipeline import agreed_confidence
+    from skyrender.localizer.confidence import agreed_confidence
     from skyrender.training.localize_fit import agreement_gain, fit_second_opinion, second_opinion_answers
 
     assert agreed_confidence(0.5, 2.0) == pytest.approx(1 / (1 + math.exp(-2.0)))

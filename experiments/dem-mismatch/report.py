@@ -11,7 +11,7 @@ import os
 
 import numpy as np
 
-from skyrender.localizer.pipeline import PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE, margin_confidence
+from skyrender.localizer.confidence import PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE, margin_confidence
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 

@@ -306,13 +306,13 @@ def stored_places(rows: list[dict] | None = None, items: dict | None = None, pla
     """The frame of the probes that score stored answers again: for each row (rows come place by place;
     ``items`` as for :func:`with_terrain`; None: the shipped confidence's 73 training-side rows,
     ``localize_fit.TRAINING_ROWS_FILE``, and the training side's CH1 photos), its best ``places`` distinct
-    places (more than 1 km apart, :func:`~skyrender.localizer.pipeline.distinct_places`) among its refined
+    places (more than 1 km apart, :func:`~skyrender.localizer.confidence.distinct_places`) among its refined
     poses, rendered with their own focal lengths (rows without refined poses are passed over). Yields (row,
     item, skyline (W,), column weights (W,) — the photo as the photo preset (``params``) sees it,
     :func:`photo_skyline` — the places' poses (P, 8), their rendered skylines (P, W), and with
     ``with_distance`` each column's terrain distance (P, W, m), else None)."""
     from ..camera import Intrinsics
-    from ..localizer.pipeline import distinct_places
+    from ..localizer.confidence import distinct_places
     from ..render.skyline import render_skylines
 
     if rows is None:
@@ -361,11 +361,11 @@ def place_report(records: list[dict], names: list[str], out_path: str, right_m: 
 
 def with_part_margins(rows: list[dict], items: dict, params=None) -> list[dict]:
     """``rows``, each given a ``part_margin`` where it has refined poses but no part margin: the
-    photo-confidence cue :func:`~skyrender.localizer.pipeline.answer_part_margin` of its refined poses
+    photo-confidence cue :func:`~skyrender.localizer.confidence.answer_part_margin` of its refined poses
     against the photo's skyline as the photo preset (``params``) extracts it (:func:`photo_skyline`); rows of
     runs at this code carry theirs. ``items`` maps photo keys to items (every photo of their places; :func:`with_terrain`)."""
     from ..localizer import LocalizeParams
-    from ..localizer.pipeline import answer_part_margin
+    from ..localizer.confidence import answer_part_margin
 
     params = params or LocalizeParams.for_photos()
     missing = [r for r in rows if r.get("part_margin") is None and len(refined_of(r))]
@@ -380,7 +380,7 @@ def margin_of(row: dict, runner_up_m: float = 1000.0) -> float:
     """1 - best / runner-up refined score, the runner-up the best refined pose farther than
     ``runner_up_m`` (m) from the answer (among the row's :func:`refined_of`; a row without them
     keeps the run's own runner-up score); 1 without a runner-up, NaN without a pose."""
-    from ..localizer.pipeline import runner_up_index
+    from ..localizer.confidence import runner_up_index
 
     poses = refined_of(row)
     if len(poses):
@@ -407,10 +407,10 @@ def apart_m(row: dict, other: dict) -> float:
 
 
 def log_best_of(row: dict) -> float:
-    """ln of the row's best refined score, rescaled to the reference width (:func:`pipeline.log_score`;
+    """ln of the row's best refined score, rescaled to the reference width (:func:`confidence.log_score`;
     the row's ``width``, else 1024 px: every CH1 photo); the best as :func:`margin_of` takes it; NaN
     without a pose."""
-    from ..localizer.pipeline import SCORE_REFERENCE_WIDTH_PX, log_score
+    from ..localizer.confidence import SCORE_REFERENCE_WIDTH_PX, log_score
 
     poses = refined_of(row)
     best = poses[:, 7].min() if len(poses) else row.get("best_score")
@@ -442,7 +442,8 @@ def second_search_rows(rows: list[dict], focal_px: dict[str, float], params=None
     within the fov-unknown search's reach (``params``, the photo preset:
     :func:`~skyrender.localizer.pipeline.fov_within_reach`). A photo with neither has none."""
     from ..localizer import LocalizeParams
-    from ..localizer.pipeline import SCORE_REFERENCE_WIDTH_PX, fov_within_reach
+    from ..localizer.confidence import SCORE_REFERENCE_WIDTH_PX
+    from ..localizer.pipeline import fov_within_reach
 
     params = params or LocalizeParams.for_photos()
     out = {r["photo"]: r for r in rows if r.get("fov_mode") == "unknown" and r["photo"] in focal_px
@@ -464,10 +465,10 @@ def rescore(rows: list[dict], logit: tuple, threshold: float, runner_up_m: float
     ValueError. A ``logit`` with a part-margin term reads each row's ``part_margin``
     (:func:`with_part_margins`); a row with poses but none: ValueError. With ``second_opinion`` (a fit's: ``from``,
     ``gain``, ``apart_m``) a fov-given row withheld with at least ``from`` gains ``gain`` where the second search's best
-    place lies within ``apart_m`` (:func:`~skyrender.localizer.pipeline.agreed_confidence`): the row's own second opinion,
+    place lies within ``apart_m`` (:func:`~skyrender.localizer.confidence.agreed_confidence`): the row's own second opinion,
     or, where it asked none (a run without abstention), the row of ``rows`` that gives what the second search would
     (:func:`second_search_rows`; ``focal_px``: the photos' focal lengths, px); with neither, ValueError."""
-    from ..localizer.pipeline import agreed_confidence, margin_logistic, uses_part_margin
+    from ..localizer.confidence import agreed_confidence, margin_logistic, uses_part_margin
 
     second_rows = second_search_rows(rows, focal_px or {})
     out = []
@@ -591,7 +592,7 @@ def main(argv=None) -> int:
         with open(os.path.join(args.out, f"{name}.json")) as f:
             report = json.load(f)
         if args.rescore:
-            from ..localizer.pipeline import PHOTO_CONFIDENCE_FILE, uses_part_margin
+            from ..localizer.confidence import PHOTO_CONFIDENCE_FILE, uses_part_margin
 
             try:
                 with open(args.fit or PHOTO_CONFIDENCE_FILE) as f:

@@ -29,9 +29,7 @@ runner-up, and the second opinion.
 
 from __future__ import annotations
 
-import json
 import math
-import os
 import resource
 import time
 from contextlib import contextmanager
@@ -46,12 +44,27 @@ from ..features import ExtractedSkyline, extract_skyline, load_photo, skyline_pe
 from ..features.skyline import SkylineParams
 from ..model import Model
 from ..render import Terrain, render_skylines
+from .confidence import (
+    PHOTO_MARGIN_LOGIT,
+    PHOTO_MIN_CONFIDENCE,
+    PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN,
+    PHOTO_RUNNER_UP_M,
+    PHOTO_SECOND_OPINION_FROM,
+    PHOTO_SECOND_OPINION_GAIN,
+    SCORE_REFERENCE_WIDTH_PX,
+    agreed_confidence,
+    answer_part_margin,
+    confidence_of,
+    margin_confidence,
+    runner_up_index,
+    uses_part_margin,
+)
 from .constraints import in_image_geometry, interfeature_visibility, prior_in_view, segments_in_sky, skyline_limit
 from .horizon_search import HorizonSearchParams, centre_indices, horizon_poses, standable_centres
 from .hypotheses import Hypotheses, generate_hypotheses
 from .pose_solver import solve_poses
 from .refinement import Refined, RefineParams, WeakSweepParams, local_rescore, refine_pose, weak_axis_sweep
-from .verification import ScoreParams, part_margins, verify_poses
+from .verification import ScoreParams, verify_poses
 
 #: Focal lengths tried when the field of view is unknown (horizontal fov, degrees).
 FOV_CANDIDATES = (30.0, 40.0, 50.0, 60.0, 70.0)
@@ -62,45 +75,6 @@ PHOTO_FOV_CANDIDATES = (35.0, 50.0, 65.0)
 #: on a 35 mm frame sees 10.3 deg, an 85 mm one 23.9 deg; a third of CH1's validation photos, 10.6-28 deg)
 PHOTO_TELEPHOTO_FOVS = (14.0, 21.0)
 PHOTO_TELEPHOTO_STEPS = (1.5 ** 0.5 - 1.0, 1.5 ** 0.25 - 1.0)
-#: The photo confidence P(within 1 km) = logistic(a + b * margin): (a, b) fitted on the CH1 training side by
-#: ``python -m skyrender.training.localize_fit``, which writes this file (with ``--part-margin``, an option:
-#: (a, b, 0, d), d for the answer's smallest part margin, :func:`answer_part_margin`).
-PHOTO_CONFIDENCE_FILE = os.path.join(os.path.dirname(__file__), "photo_confidence.json")
-
-
-def _photo_confidence_fit() -> dict:
-    try:
-        with open(PHOTO_CONFIDENCE_FILE) as f:
-            return json.load(f)
-    except (OSError, ValueError):
-        return {}  # not fitted yet
-
-
-def _photo_margin_logit(fit: dict) -> tuple[float, ...]:
-    try:
-        logit = tuple(float(v) for v in fit["logit"])
-    except (KeyError, TypeError, ValueError):
-        return 0.0, 1.0
-    return logit if len(logit) in (2, 3, 4) else (0.0, 1.0)
-
-
-_FIT = _photo_confidence_fit()
-PHOTO_MARGIN_LOGIT = _photo_margin_logit(_FIT)
-#: Abstain below this photo confidence (a fitted P(within 1 km)), chosen by the fit's rule on
-#: the training photos (``localize_fit.abstain_threshold``): above every wrong answer there, and
-#: at least 0.5.
-PHOTO_MIN_CONFIDENCE = float(_FIT.get("min_confidence", 0.8))
-#: ... and with the fov unknown (several focal lengths searched, margins of another kind): the same rule on
-#: training photos localized that way, never below :data:`PHOTO_MIN_CONFIDENCE`.
-PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN = float(_FIT.get("min_confidence_fov_unknown", PHOTO_MIN_CONFIDENCE))
-#: The photo confidence's runner-up is the best refined pose farther than this (m) from the
-#: answer, chosen with the logistic on the training photos (``localize_fit``).
-PHOTO_RUNNER_UP_M = float(_FIT.get("runner_up_m", 1000.0))
-#: With the fov given, an answer withheld with a confidence of at least this is searched for again with the fov unknown,
-#: and where the two searches' best places lie within 1 km of each other its confidence's logit gains the second
-#: (:func:`_second_opinion`; fitted by ``localize_fit``; inf: no second opinion).
-PHOTO_SECOND_OPINION_FROM = float((_FIT.get("second_opinion") or {}).get("from", math.inf))
-PHOTO_SECOND_OPINION_GAIN = float((_FIT.get("second_opinion") or {}).get("gain", 0.0))
 #: Real photographs stand nearly upright (hand-held, EXIF orientation applied): the camera roll
 #: the photo preset's alignment and least squares may fit (deg; CH1 training oracle fits: -5.4..3.0).
 PHOTO_MAX_SWING_DEG = 8.0
@@ -173,7 +147,7 @@ class LocalizeParams:
     runner_up_m: float | None = None  # confidence: the runner-up is the best refined pose this far away (None: distinct)
     confidence_model: str = "agreement"  # "agreement" (renders) or "margin": P(right) from the runner-up's margin
     # "margin": P = 1 / (1 + exp(-(a + b m + c ln s))), m = 1 - best / runner-up score, s the best score (px at
-    # SCORE_REFERENCE_WIDTH_PX wide); (a, b) or (a, b, c): margin_logistic
+    # SCORE_REFERENCE_WIDTH_PX wide); (a, b) or (a, b, c): confidence.margin_logistic
     margin_logit: tuple = (0.0, 1.0)
     ordered: bool = True  # probabilistic ordering (False: a seeded arbitrary order)
     use_horizons: bool = True  # also match the skyline against the model's far horizons (no peaks needed)
@@ -253,10 +227,10 @@ class LocalizeParams:
         with the learned extractor alone, ``experiments/ch1/select/``). Three-point hypotheses
         are off (on CH1 their peaks are rarely DEM peaks; generating them took 10-30 s). The refined scores of right and
         wrong poses overlap (1.1-2.4 vs 1.1-4.0 px on CH1 training photos), but the
-        margin to the best pose farther away (:data:`PHOTO_RUNNER_UP_M`) separates them, so the
-        confidence is a logistic of that margin fitted on the CH1 training side (:data:`PHOTO_MARGIN_LOGIT`;
+        margin to the best pose farther away (:data:`.confidence.PHOTO_RUNNER_UP_M`) separates them, so the
+        confidence is a logistic of that margin fitted on the CH1 training side (:data:`.confidence.PHOTO_MARGIN_LOGIT`;
         a term of the best score was tried and did not hold on places left out, and one of the answer's
-        smallest margin on either half of the skyline, :func:`answer_part_margin`, kept more right
+        smallest margin on either half of the skyline, :func:`.confidence.answer_part_margin`, kept more right
         training answers but answered a validation photo 54 km wrong: ``localize_fit``).
         The camera roll stays within :data:`PHOTO_MAX_SWING_DEG` in the verification's alignment
         and the refinement: wrong places fitted with 10-50 deg of it (held in the far-horizon
@@ -264,7 +238,7 @@ class LocalizeParams:
         A photo wider than 1,024 px is searched on its skyline reduced to 1,024 columns (``search_width``):
         CH1 photos scaled up 4x were localized in half the time and 9 of 9 right instead of 6
         (``experiments/ch1/search-width/``). With the fov given, an answer withheld with a confidence of at least
-        :data:`PHOTO_SECOND_OPINION_FROM` asks a search with the fov unknown, and is given where that search ends
+        :data:`.confidence.PHOTO_SECOND_OPINION_FROM` asks a search with the fov unknown, and is given where that search ends
         within 1 km of it (:func:`_second_opinion`): on the 73 CH1 training-side photos the two agree on 30 of the
         51 right answers and none of the 22 wrong ones (``experiments/ch1/mode-agreement/``). For a photo
         narrower than 27.5 deg that search's fovs are scaled to the given one (:func:`second_opinion_params`;
@@ -342,7 +316,8 @@ class LocalizeStats:
     refined: int = 0
     best_score: float | None = None  # the winner's refined score (px)...
     runner_up_score: float | None = None  # ...and the runner-up's (the confidence's margin)
-    part_margin: float | None = None  # the answer's smallest margin on a part of the skyline (:func:`answer_part_margin`)
+    # the answer's smallest margin on a part of the skyline (:func:`.confidence.answer_part_margin`)
+    part_margin: float | None = None
     seconds: dict = field(default_factory=dict)
     peak_mb: dict = field(default_factory=dict)  # stage -> the process's peak RSS (MB) when it first reached it
     # the three-point search chunk by chunk: hypotheses solved, best verified and refined scores so far
@@ -508,99 +483,6 @@ def _take_distinct(poses: np.ndarray, order, taken: list[np.ndarray], same_m: fl
     return picked
 
 
-def confidence_of(best: Refined, runner_up: Refined | None) -> float:
-    """Agreement of the best refined pose, discounted when a distinct pose fits almost as
-    well: by agreement, or by score (a wrong pose 200 m off scored 0.25 px where the
-    right one scored 0.09 px, at agreements 0.96 and 1.0)."""
-    if runner_up is None:
-        return best.agreement
-    agreement_margin = max(best.agreement - runner_up.agreement, 0.0)
-    score_margin = max(1.0 - best.score / max(runner_up.score, 1e-9), 0.0)
-    return float(best.agreement * min(1.0, 0.5 + 5.0 * agreement_margin + score_margin))
-
-
-def runner_up_index(xy: np.ndarray, scores: np.ndarray, best: int, runner_up_m: float) -> int | None:
-    """Index of the lowest-scoring pose farther than ``runner_up_m`` (m) from pose ``best``
-    (``xy``: (N, 2) positions in m; ``scores``: (N,) refined scores in px, lower is better);
-    None when every pose lies within that distance."""
-    xy, scores = np.asarray(xy, np.float64).reshape(-1, 2), np.asarray(scores, np.float64)
-    far = np.hypot(*(xy - xy[best]).T) > runner_up_m
-    return int(np.flatnonzero(far)[np.argmin(scores[far])]) if far.any() else None
-
-
-#: The photo confidence reads the best score as if the photo were this wide (px), so that it means the
-#: same on a photo of any size (the CH1 photos it is fitted on are 1024 px wide).
-SCORE_REFERENCE_WIDTH_PX = 1024.0
-
-
-def log_score(score_px, width_px: float = SCORE_REFERENCE_WIDTH_PX):
-    """ln of a refined verification score ``score_px`` (px, scalar or array) of a photo ``width_px``
-    wide, rescaled to :data:`SCORE_REFERENCE_WIDTH_PX` (floored at 1e-3 px: a perfect fit is finite)."""
-    return np.log(np.maximum(np.asarray(score_px, np.float64) * SCORE_REFERENCE_WIDTH_PX / width_px, 1e-3))
-
-
-def margin_logistic(margin, logit: tuple, log_best=0.0, part_margin=0.0):
-    """P(right) = 1 / (1 + exp(-(a + b m + c l + d h))) of the margin m, the log best score l
-    (:func:`log_score`) and the smallest part margin h (:func:`answer_part_margin`; scalars or
-    arrays) for ``logit`` = (a, b, c, d), or (a, b, c) or (a, b): the missing terms 0."""
-    a, b, c, d = (*logit, 0.0, 0.0)[:4]
-    return 1.0 / (1.0 + np.exp(-(a + b * np.asarray(margin, np.float64) + c * np.asarray(log_best, np.float64)
-                                 + d * np.asarray(part_margin, np.float64))))
-
-
-def uses_part_margin(logit: tuple) -> bool:
-    """Whether a photo-confidence ``logit`` has a part-margin term (then the answer's part margin is worth rendering)."""
-    return len(logit) > 3 and logit[3] != 0.0
-
-
-def margin_confidence(best_score: float, runner_up_score: float, logit: tuple,
-                      width_px: float = SCORE_REFERENCE_WIDTH_PX, part_margin: float = 0.0) -> float:
-    """P(right) from the relative margin m = 1 - best / runner-up (scores in px of a photo
-    ``width_px`` wide, lower is better) and, with a three- or four-term ``logit``, the best score itself
-    and the answer's smallest part margin: :func:`margin_logistic`; no runner-up is m = 1."""
-    margin = 1.0 - best_score / runner_up_score if runner_up_score > 0 and math.isfinite(runner_up_score) else 1.0
-    return float(margin_logistic(margin, logit, log_score(best_score, width_px), part_margin))
-
-
-#: The photo confidence's part margin (an option, ``localize_fit --part-margin``): the skyline in this many
-#: equal parts, the answer against the best PART_PLACES - 1 other distinct places (each farther than the
-#: runner-up distance from those before it). On the 73 CH1 training-side photos (``experiments/ch1/split-half/``)
-#: halves kept 36 right answers above the fitted threshold against the margin's 32 (thirds 32), leave place out
-#: 39 right / 3 wrong against 39 / 5; on the validation side, rescored once, 33 answers against 30, one of them
-#: ``dsc05274`` 54 km off at 0.92 (``experiments/ch1/part-margin/``): not the shipped fit.
-PART_COUNT = 2
-PART_PLACES = 4
-
-
-def distinct_places(poses: np.ndarray, k: int | None = None, apart_m: float = 1000.0) -> list[int]:
-    """Indices of refined poses (K, 8: ..., score last), best score first, each farther than ``apart_m``
-    (m) from every one taken before it: the distinct places a row's answer is chosen among; at most ``k``."""
-    kept: list[int] = []
-    for i in np.argsort(poses[:, 7], kind="stable"):
-        if k is not None and len(kept) == k:
-            break
-        if all(np.hypot(*(poses[i, :2] - poses[j, :2])) > apart_m for j in kept):
-            kept.append(int(i))
-    return kept
-
-
-def answer_part_margin(terrain: Terrain, refined: np.ndarray, sky: np.ndarray, weights: np.ndarray, height_px: int,
-                       apart_m: float, params: ScoreParams) -> float:
-    """The answer's smallest margin over the other places on :data:`PART_COUNT` parts of the skyline
-    (:func:`~.verification.part_margins`): refined poses (K, 8: x, y, z, pan, tilt, swing, f_px, score),
-    the answer the best-scoring; the best :data:`PART_PLACES` distinct places (:func:`distinct_places`,
-    ``apart_m`` apart) rendered once. 1 where no other place was refined (as the margin)."""
-    places = distinct_places(refined, PART_PLACES, apart_m)
-    if len(places) < 2:
-        return 1.0
-    P = refined[places]
-    W = len(sky)
-    k = np.column_stack([P[:, 6], np.full(len(P), W / 2.0), np.full(len(P), height_px / 2.0)])
-    rendered = render_skylines(terrain, P[:, :6], Intrinsics(W, height_px, P[0, 6], W / 2.0, height_px / 2.0),
-                               per_pose_intrinsics=k)
-    return float(part_margins(rendered, sky, weights, PART_COUNT, params).min())
-
-
 @dataclass
 class _Search:
     """What every stage of one localization reads: the photo's skyline and peaks, the
@@ -728,7 +610,7 @@ def _second_opinion(search: "_Search", accepted: "_Candidate | None", result: Lo
     """Stage 4e: the photo searched again with the fov unknown (same skyline, terrain and parameters). A look-alike
     fits the skyline at the given focal length; at a focal length of its own the search finds another. So where both
     searches' best places lie within ``second_opinion_m`` of each other, the logit of the fov-given answer's
-    confidence gains ``second_opinion_gain`` (:func:`agreed_confidence`; fitted on the training photos by
+    confidence gains ``second_opinion_gain`` (:func:`.confidence.agreed_confidence`; fitted on the training photos by
     ``localize_fit``), and the answer is given if that reaches the threshold; otherwise the abstention stands.
     The second search's best place and the distance are kept in the stats."""
     params, stats = search.params, search.stats
@@ -773,15 +655,6 @@ def second_opinion_params(params: LocalizeParams, fov: float) -> LocalizeParams:
     scale = fov / sorted(params.fov_candidates)[len(params.fov_candidates) // 2]
     return replace(params, fov_candidates=tuple(f * scale for f in params.fov_candidates),
                    horizon_fov_step=tuple(s * scale for s in params.horizon_fov_step))
-
-
-def agreed_confidence(confidence: float, gain: float) -> float:
-    """A confidence (a probability) whose logit gains ``gain``: an answer that a second search with the fov
-    unknown agrees with (:func:`_second_opinion`). 0 and 1 stay."""
-    if confidence <= 0.0 or confidence >= 1.0:
-        return float(confidence)
-    z = math.log(confidence / (1.0 - confidence)) + gain
-    return 1.0 / (1.0 + math.exp(-z)) if z >= 0 else math.exp(z) / (1.0 + math.exp(z))  # no overflow either way
 
 
 def reduce_skyline(sky: np.ndarray, weights: np.ndarray, W: int, H: int,

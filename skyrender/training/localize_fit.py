@@ -13,7 +13,7 @@ one, margin for margin, on the training photos, but how well any answer fits dep
 and judged a place at a time (:func:`leave_place_out`, printed and written with every fit) it
 answers 40 right and 5 wrong against the margin's 39 and 5; on the validation side, run once, it
 answered 3 photos 2-54 km wrong (``experiments/ch1/score-term/``). ``--part-margin`` adds the
-answer's smallest part margin h (:func:`~skyrender.localizer.pipeline.answer_part_margin`: its margin
+answer's smallest part margin h (:func:`~skyrender.localizer.confidence.answer_part_margin`: its margin
 over the other refined places on each half of the skyline): P = 1 / (1 + exp(-(a + b m + d h))). A
 look-alike that wins the whole skyline on one half loses on the other; on the training photos it kept
 36 right answers above the threshold against the margin's 32, leave place out 39 right / 3 wrong
@@ -60,7 +60,7 @@ from ..benchmarks.real_localize import (
 from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side
 from ..evaluate import git_commit
 from ..localizer import LocalizeParams
-from ..localizer.pipeline import PHOTO_CONFIDENCE_FILE, margin_logistic, uses_part_margin
+from ..localizer.confidence import PHOTO_CONFIDENCE_FILE, margin_logistic, uses_part_margin
 
 RIGHT_M = 1000.0
 #: The runner-up distances tried by ``--runner-up-choices`` (m): the one keeping most right training
@@ -155,7 +155,7 @@ def fit_confidence(rows: list[dict], choices_m=RUNNER_UP_CHOICES_M, score_term: 
     right answers above its threshold is taken (ties: the nearest). With it, the leave-place-out
     counts of the margin alone and of margin and the second cue (:func:`leave_place_out`, places from
     ``experiments/photos/split.json``). Returns what ``photo_confidence.json`` holds, less the commits;
-    a part-margin fit's logit is written (a, b, 0, d), as :func:`~skyrender.localizer.pipeline.margin_logistic` reads it."""
+    a part-margin fit's logit is written (a, b, 0, d), as :func:`~skyrender.localizer.confidence.margin_logistic` reads it."""
     right = rows_right(rows)
     log_best = np.array([log_best_of(r) for r in rows])
     second = part_margins_of(rows) if part_term else log_best
@@ -209,7 +209,7 @@ def second_opinion_answers(confidence: np.ndarray, agree: np.ndarray, gain: floa
     """(n,) bool: the answers given with the second opinion: at or above ``threshold`` on their own, or withheld
     with at least ``floor`` and agreed with, their confidence with the ``gain`` (:func:`agreed_confidence`)
     reaching the threshold."""
-    from ..localizer.pipeline import agreed_confidence
+    from ..localizer.confidence import agreed_confidence
 
     agreed = np.array([agreed_confidence(float(c), gain) for c in confidence])
     return (confidence >= threshold) | ((confidence >= floor) & agree & (agreed >= threshold))
@@ -293,7 +293,7 @@ def fov_unknown_report(name: str, rows: list[dict], logit: tuple, runner_up_m: f
 def fov_unknown_runs_report(runs: dict[str, list[str]]) -> str:
     """:func:`fov_unknown_report` of each run (a name and its ``bench-real`` JSON files, rows pooled) under the photo
     preset's fit, those whose files are all there."""
-    from ..localizer.pipeline import PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE, PHOTO_RUNNER_UP_M
+    from ..localizer.confidence import PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE, PHOTO_RUNNER_UP_M
 
     reports = []
     for name, paths in runs.items():
@@ -324,7 +324,7 @@ def main(argv=None) -> int:
     parser.add_argument("--score-term", action="store_true",
                         help="fit the log best score too (a probe, not the default: it did not hold on places left out)")
     parser.add_argument("--part-margin", action="store_true",
-                        help="fit the answer's smallest part margin too (pipeline.answer_part_margin; rendered for rows "
+                        help="fit the answer's smallest part margin too (confidence.answer_part_margin; rendered for rows "
                         "without one, ~2 s a photo); an option, not the shipped fit (experiments/ch1/part-margin/)")
     parser.add_argument("--fov-unknown-rows", default=None, metavar="JSON", nargs="+",
                         help="`real_localize --side train --fov unknown --no-abstain` runs' JSON: the threshold with "

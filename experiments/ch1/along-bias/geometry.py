@@ -16,7 +16,6 @@ import math
 import sys
 
 import numpy as np
-
 from PIL import Image
 
 from skyrender.benchmarks.real_localize import refined_of, with_terrain

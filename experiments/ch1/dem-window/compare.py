@@ -16,7 +16,7 @@ import json
 import numpy as np
 
 from skyrender.benchmarks.real_localize import log_best_of, margin_of, refined_of
-from skyrender.localizer.pipeline import PHOTO_CONFIDENCE_FILE
+from skyrender.localizer.confidence import PHOTO_CONFIDENCE_FILE
 from skyrender.training.localize_fit import confidences
 
 

@@ -16,7 +16,7 @@ import sys
 import numpy as np
 
 from skyrender.benchmarks.real_localize import log_best_of, margin_of
-from skyrender.localizer.pipeline import PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE, PHOTO_RUNNER_UP_M
+from skyrender.localizer.confidence import PHOTO_MARGIN_LOGIT, PHOTO_MIN_CONFIDENCE, PHOTO_RUNNER_UP_M
 from skyrender.training.localize_fit import TRAINING_ROWS_FILE, confidences
 
 

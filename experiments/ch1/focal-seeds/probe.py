@@ -25,7 +25,7 @@ from skyrender.benchmarks.real_localize import photo_skyline, refined_of, with_t
 from skyrender.camera import Intrinsics
 from skyrender.datasets.real_photos import items_on_side
 from skyrender.localizer import LocalizeParams
-from skyrender.localizer.pipeline import distinct_places, margin_logistic, runner_up_index
+from skyrender.localizer.confidence import distinct_places, margin_logistic, runner_up_index
 from skyrender.localizer.refinement import refine_pose
 
 SEEDS = (0.85, 1.0, 1.15)  # the fov times about these

@@ -29,7 +29,7 @@ def rows_of(path):
 
 def confidence_of(r):
     from skyrender.benchmarks.real_localize import log_best_of, margin_of
-    from skyrender.localizer.pipeline import PHOTO_MARGIN_LOGIT, PHOTO_RUNNER_UP_M
+    from skyrender.localizer.confidence import PHOTO_MARGIN_LOGIT, PHOTO_RUNNER_UP_M
     from skyrender.training.localize_fit import confidences
 
     return float(confidences(np.array([margin_of(r, PHOTO_RUNNER_UP_M)]), np.array([log_best_of(r)]),

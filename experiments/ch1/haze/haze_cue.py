@@ -28,7 +28,7 @@ from skyrender.diagnostics.oracle import DEM_DIR, tiles_around
 from skyrender.features import extract_skyline, load_photo
 from skyrender.features.sky import pixel_features
 from skyrender.localizer import LocalizeParams
-from skyrender.localizer.pipeline import runner_up_index
+from skyrender.localizer.confidence import runner_up_index
 from skyrender.render import Terrain
 from skyrender.render.skyline import render_skylines
 

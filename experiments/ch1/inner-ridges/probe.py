@@ -26,7 +26,7 @@ from skyrender.benchmarks.real_localize import photo_skyline, refined_of, with_t
 from skyrender.camera import Intrinsics, Pose
 from skyrender.datasets.real_photos import REPO, items_on_side
 from skyrender.localizer import LocalizeParams
-from skyrender.localizer.pipeline import distinct_places
+from skyrender.localizer.confidence import distinct_places
 from skyrender.render.photo import cast_pixel_rays
 
 ROWS = os.path.join(REPO, "experiments", "ch1", "confidence-train-rows.json")

@@ -19,7 +19,7 @@ import numpy as np
 from skyrender.camera import Intrinsics, Pose
 from skyrender.datasets.synthetic import invented_skyline_share
 from skyrender.dem import load_dem
-from skyrender.localizer.pipeline import PHOTO_RUNNER_UP_M, runner_up_index
+from skyrender.localizer.confidence import PHOTO_RUNNER_UP_M, runner_up_index
 from skyrender.render import Terrain, render_skylines
 
 TILES = sorted(glob.glob("../shared/data/dem/N4*.hgt"))

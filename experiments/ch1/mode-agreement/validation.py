@@ -11,7 +11,7 @@ import sys
 import numpy as np
 
 from skyrender.benchmarks.real_localize import apart_m, margin_of
-from skyrender.localizer.pipeline import PHOTO_CONFIDENCE_FILE, agreed_confidence, margin_logistic
+from skyrender.localizer.confidence import PHOTO_CONFIDENCE_FILE, agreed_confidence, margin_logistic
 from skyrender.training.localize_fit import rows_right
 
 fit = json.load(open(PHOTO_CONFIDENCE_FILE))

@@ -14,7 +14,7 @@ import sys
 import numpy as np
 
 from skyrender.benchmarks.real_localize import margin_of
-from skyrender.localizer.pipeline import PHOTO_CONFIDENCE_FILE, margin_logistic
+from skyrender.localizer.confidence import PHOTO_CONFIDENCE_FILE, margin_logistic
 
 
 def scored(path: str, fit: dict) -> dict:

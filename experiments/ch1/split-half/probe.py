@@ -21,7 +21,7 @@ from skyrender.benchmarks.real_localize import photo_skyline, refined_of, with_t
 from skyrender.camera import Intrinsics
 from skyrender.datasets.real_photos import REPO, items_on_side
 from skyrender.localizer import LocalizeParams
-from skyrender.localizer.pipeline import distinct_places
+from skyrender.localizer.confidence import distinct_places
 from skyrender.localizer.verification import score_skylines
 from skyrender.render import render_skylines
 

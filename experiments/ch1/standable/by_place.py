@@ -10,7 +10,7 @@ from collections import defaultdict
 import numpy as np
 
 from skyrender.benchmarks.real_localize import log_best_of, margin_of, split_places
-from skyrender.localizer.pipeline import margin_logistic
+from skyrender.localizer.confidence import margin_logistic
 
 place_of = split_places()
 runs = []

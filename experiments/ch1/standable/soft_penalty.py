@@ -13,7 +13,7 @@ import json
 import numpy as np
 
 from skyrender.benchmarks.real_localize import split_places
-from skyrender.localizer.pipeline import runner_up_index
+from skyrender.localizer.confidence import runner_up_index
 from skyrender.training.localize_fit import abstain_threshold, fit_logistic, leave_place_out
 
 parser = argparse.ArgumentParser()
