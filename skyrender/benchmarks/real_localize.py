@@ -11,8 +11,9 @@ localized with :meth:`LocalizeParams.for_photos`, no prior, the camera 2 m above
 its skyline extracted by the learned extractor, the fov given (``known``: from its focal
 length) or not (``unknown``). Reported per photo:
 error of the position (m), status, confidence, seconds (extraction included, model
-building not); and recall at 100 m / 250 m / 1 km, abstentions and confident answers
-more than 1 km wrong.
+building not); and recall at 100 m / 250 m / 1 km (with its 95 % interval, the places resampled
+whole: :func:`place_intervals`), abstentions and confident answers more than 1 km wrong, the
+calibration of the confidence and a line per place.
 """
 
 from __future__ import annotations

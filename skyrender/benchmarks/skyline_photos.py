@@ -14,7 +14,8 @@ those of the first method. Sides (``experiments/photos/split.json``):
 Web and GeoPose3K photos, never trained on) and ``train`` (what the network was fitted on;
 not an unseen-photo figure). Also: the share of columns whose truth has no visible colour
 edge near it (truth no photo-based method can follow), and the error of high- against
-low-confidence columns. Writes ``bench-skyline.json`` (with the commit) and the table.
+low-confidence columns, and each summary's 95 % interval with the places resampled whole. Writes
+``bench-skyline.json`` (with the commit) and the table; ``--retable`` writes the table again from that JSON.
 """
 
 from __future__ import annotations
