@@ -63,6 +63,7 @@ PHOTO_RUNNER_UP_M = float(_FIT.get("runner_up_m", 1000.0))
 PHOTO_SECOND_OPINION_FROM = float((_FIT.get("second_opinion") or {}).get("from", math.inf))
 PHOTO_SECOND_OPINION_GAIN = float((_FIT.get("second_opinion") or {}).get("gain", 0.0))
 
+
 def confidence_of(best: Refined, runner_up: Refined | None) -> float:
     """Agreement of the best refined pose, discounted when a distinct pose fits almost as
     well: by agreement, or by score (a wrong pose 200 m off scored 0.25 px where the
