@@ -567,6 +567,18 @@ def test_bench_skyline_retables_a_run_with_the_intervals(tmp_path):
     assert main(["--retable", "--out", str(tmp_path / "none")]) == 2
 
 
+def test_bench_skyline_times_the_first_extractor_when_the_baseline_comes_first(tmp_path):
+    """A ``bench-skyline`` run listing Otsu first scores it and times ``select`` (the speed line once timed the
+    first method and stopped with a ValueError on Otsu)."""
+    from skyrender.benchmarks.skyline_photos import main
+
+    assert main(["--data", str(data_path("photos")), "--sides", "heldout", "--limit", "1", "--methods", "otsu",
+                 "--out", str(tmp_path)]) == 0
+    report = json.loads((tmp_path / "bench-skyline.json").read_text())
+    assert report["speed"]["method"] == "select" and report["speed"]["1024"]["seconds"] > 0
+    assert report["sides"]["heldout"]["summary"]["otsu"]["photos"] == 1
+
+
 def test_an_extractor_run_is_compared_with_the_committed_benchmark_photo_by_photo():
     """``skyline_photos.unchanged_report``: the identity check after a change counts the photos whose median
     and share within 5 px are the committed ones, and names each that moved."""
