@@ -63,6 +63,11 @@ class Pose:
         return Pose(self.x, self.y, self.z, self.pan % 360.0, self.tilt, swing)
 
 
+def horizontal_fov(width: float, f_px: float) -> float:
+    """Horizontal field of view (deg) of an image ``width`` px wide at focal length ``f_px`` (px): 2 atan(W / (2 f))."""
+    return math.degrees(2.0 * math.atan(width / (2.0 * f_px)))
+
+
 @dataclass(frozen=True)
 class Intrinsics:
     """Pinhole intrinsics: image size (px), focal length f_px (px), principal point (px)."""
@@ -88,7 +93,7 @@ class Intrinsics:
     @property
     def fov(self) -> float:
         """Horizontal field of view, degrees."""
-        return math.degrees(2.0 * math.atan(self.width / (2.0 * self.f_px)))
+        return horizontal_fov(self.width, self.f_px)
 
     def array(self) -> np.ndarray:
         """(f_px, cx, cy) as a float64 array."""

@@ -26,6 +26,7 @@ import time
 
 import numpy as np
 
+from ..camera import horizontal_fov
 from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side, photo_items, split_places
 from ..diagnostics.oracle import DEM_DIR, tiles_around
 from ..evaluate import git_commit, place_interval, position_errors
@@ -161,7 +162,7 @@ def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown
             t = time.perf_counter()
             image = load_photo(it.image_path)
             skyline = true_extraction(it, image.shape[0]) if true_skyline else extract_skyline(image, params.skyline_params())
-            given = given_fov(image.shape[1], it.focal_px)
+            given = horizontal_fov(image.shape[1], it.focal_px)
             # "second": the search a fov-given answer's second opinion runs (the fov unknown, its range scaled to the
             # given fov where the fov-unknown search does not reach it), for fitting the second opinion
             run_params = second_opinion_params(params, given) if mode == "second" else params
@@ -299,7 +300,7 @@ def photo_scaled_up(item, factor: int) -> tuple[np.ndarray, np.ndarray, float]:
 
     image = load_photo(item.image_path)
     big = cv2.resize(image, (image.shape[1] * factor, image.shape[0] * factor), interpolation=cv2.INTER_CUBIC)
-    return image, big, math.degrees(2.0 * math.atan(image.shape[1] / (2.0 * item.focal_px)))
+    return image, big, horizontal_fov(image.shape[1], item.focal_px)
 
 
 def stored_places(rows: list[dict] | None = None, items: dict | None = None, places: int = 4,
@@ -430,17 +431,11 @@ def logit_text(logit) -> str:
     return text
 
 
-def given_fov(width: float, focal_px: float) -> float:
-    """The horizontal fov (deg) a photo ``width`` px wide is given with its focal length (px): what the benchmark
-    localizes it with in the fov-known mode."""
-    return float(np.degrees(2 * np.arctan(width / (2 * focal_px))))
-
-
 def second_search_rows(rows: list[dict], focal_px: dict[str, float], params=None) -> dict[str, dict]:
     """{photo: the row that gives what a fov-given answer's second opinion searches}: the photo's ``second`` row
     (``--fov second``), else its fov-unknown row where that search is the second opinion's to the bit: the photo's
-    given fov (:func:`given_fov`, from ``focal_px``, px, at the row's ``width``, CH1's 1024 px where it has none)
-    within the fov-unknown search's reach (``params``, the photo preset:
+    given fov (:func:`~skyrender.camera.horizontal_fov` of ``focal_px``, px, at the row's ``width``, CH1's 1024 px
+    where it has none) within the fov-unknown search's reach (``params``, the photo preset:
     :func:`~skyrender.localizer.pipeline.fov_within_reach`). A photo with neither has none."""
     from ..localizer import LocalizeParams
     from ..localizer.confidence import SCORE_REFERENCE_WIDTH_PX
@@ -448,7 +443,7 @@ def second_search_rows(rows: list[dict], focal_px: dict[str, float], params=None
 
     params = params or LocalizeParams.for_photos()
     out = {r["photo"]: r for r in rows if r.get("fov_mode") == "unknown" and r["photo"] in focal_px
-           and fov_within_reach(params, given_fov(r.get("width", SCORE_REFERENCE_WIDTH_PX), focal_px[r["photo"]]))}
+           and fov_within_reach(params, horizontal_fov(r.get("width", SCORE_REFERENCE_WIDTH_PX), focal_px[r["photo"]]))}
     out.update({r["photo"]: r for r in rows if r.get("fov_mode") == "second"})
     return out
 

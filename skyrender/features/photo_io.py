@@ -9,6 +9,7 @@ import os
 
 import numpy as np
 
+from ..camera import horizontal_fov
 from ..errors import InputError
 from ..io import captured_stderr
 
@@ -129,7 +130,7 @@ def exif_fov(path: str) -> float | None:
             f_px = float(f_mm) * float(xres) / unit_mm
     if not f_px or not math.isfinite(f_px):
         return None
-    return math.degrees(2 * math.atan(w / (2 * f_px)))
+    return horizontal_fov(w, f_px)
 
 
 def as_rgb8(image: np.ndarray, name: str = "image", bgr: bool = False) -> np.ndarray:

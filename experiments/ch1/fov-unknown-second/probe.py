@@ -20,6 +20,7 @@ from dataclasses import replace
 import numpy as np
 
 from skyrender.benchmarks.real_localize import answer_xy, refined_of, run
+from skyrender.camera import horizontal_fov
 from skyrender.datasets.real_photos import photo_items
 from skyrender.localizer import LocalizeParams
 
@@ -54,8 +55,7 @@ def main(out: str) -> None:
         poses = refined_of(r)
         f_answer = poses[int(np.argmin(poses[:, 7])), 6]
         row = {"photo": key, "confidence": r["confidence"], "error_m": float(np.hypot(*(xy - truth))),
-               "answer_fov": float(np.degrees(2 * np.arctan(512.0 / f_answer))),
-               "true_fov": float(np.degrees(2 * np.arctan(512.0 / items[key].focal_px))),
+               "answer_fov": horizontal_fov(1024, f_answer), "true_fov": horizontal_fov(1024, items[key].focal_px),
                "second_error_m": float(np.hypot(*(second - truth))), "apart_m": float(np.hypot(*(second - xy)))}
         row["agree"] = row["apart_m"] <= 1000.0
         result.append(row)

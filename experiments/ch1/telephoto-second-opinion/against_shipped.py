@@ -10,7 +10,7 @@ import sys
 
 import numpy as np
 
-from skyrender.benchmarks.real_localize import given_fov
+from skyrender.camera import horizontal_fov
 from skyrender.datasets.real_photos import photo_items
 from skyrender.localizer import LocalizeParams
 from skyrender.localizer.pipeline import fov_within_reach
@@ -30,7 +30,7 @@ def main() -> None:
     within = 0
     for key, r in new.items():
         o = old[key]
-        fov = given_fov(r["width"], focal[key])
+        fov = horizontal_fov(r["width"], focal[key])
         reach = fov_within_reach(photo, fov)
         within += reach
         poses_same = r["refined_poses"] == o["refined_poses"]
