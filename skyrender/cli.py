@@ -249,6 +249,8 @@ def localize(
     json_out: bool = typer.Option(False, "--json", help="print the result as one JSON object"),
     overlay: Optional[Path] = typer.Option(None, "--overlay", help="write the photo with both skylines and peaks"),
     geojson: Optional[Path] = typer.Option(None, "--geojson", help="write the camera position and view cone"),
+    candidates: int = typer.Option(0, "--candidates", help="also list the N best distinct places refined, the answer's "
+                                   "(given or withheld) first: where to look when it abstains or doubts"),
     stats: bool = typer.Option(False, "--stats", help="print per-stage times and hypothesis counts (stderr)"),
     prior_peak: Optional[list[int]] = typer.Option(None, "--prior-peak", help="id of a model peak known to be in view"),
     prior_near: Optional[str] = typer.Option(None, "--prior-near", help="X,Y,RADIUS: a peak within RADIUS m is in view"),
@@ -264,7 +266,9 @@ def localize(
 ):
     """Estimate the camera pose (x, y, z, pan, tilt, swing) from one photograph.
 
-    Exit status 0: localized; 3: abstained (no pose it would stand behind)."""
+    Exit status 0: localized; 3: abstained (no pose it would stand behind). With ``--candidates N``
+    the best N distinct places it refined are listed too (``"candidates"`` in ``--json``, points in
+    ``--geojson``), abstaining or not: only the first, the answer's, has a confidence."""
     from dataclasses import replace
 
     from .features import load_photo
@@ -282,6 +286,8 @@ def localize(
         raise InputError(f"--height must lie in [0, {MAX_HEIGHT_M:.0f}] m above ground, got {height}")
     if fov is not None and not (0 < fov < 180):
         raise InputError(f"--fov must lie in (0, 180) degrees, got {fov}")
+    if not 0 <= candidates <= MAX_CANDIDATES:
+        raise InputError(f"--candidates must lie in [0, {MAX_CANDIDATES}], got {candidates}")
     for path, option, kinds in ((overlay, "--overlay", IMAGE_SUFFIXES), (geojson, "--geojson", (".geojson", ".json"))):
         if path is not None:
             _check_writable(path, option, kinds)
@@ -307,14 +313,19 @@ def localize(
         from .features import as_rgb8
 
         write_image(overlay, localization_overlay(as_rgb8(photo), result, the_model))
-    if geojson is not None and result.localized:
-        write_json(geojson, camera_geojson(result.pose, result.fov, the_model.dem))
+    places = result.places(candidates, params.places_apart_m, the_model.dem)
+    if geojson is not None and (result.localized or places):
+        doc = (camera_geojson(result.pose, result.fov, the_model.dem) if result.localized
+               else {"type": "FeatureCollection", "features": []})
+        doc["features"] += places_geojson(places)
+        write_json(geojson, doc)
     if stats:
         st = result.stats.to_dict()
         print(f"stats: {json.dumps(st)}", file=sys.stderr)
     if json_out:
-        emit_json(result.to_json())
-    elif result.localized:
+        emit_json({**result.to_json(), **({"candidates": places} if candidates else {})})
+        return 0 if result.localized else 3
+    if result.localized:
         d = result.to_json()
         where = f" (lat {d['lat']:.5f}, lon {d['lon']:.5f})" if d["lat"] is not None else ""
         typer.echo(f"localized: x={d['x']:.1f} y={d['y']:.1f} z={d['z']:.1f}{where} pan={d['pan']:.2f} "
@@ -329,7 +340,35 @@ def localize(
         second = second_opinion_text(result.stats.second_opinion, False, params.second_opinion_m)
         typer.echo(f"abstained: no pose found that fits the skyline well enough ({result.hypotheses} hypotheses, "
                    f"{result.seconds:.1f} s){second}{hint}")
+    for line in places_text(places, result.localized):
+        typer.echo(line)
     return 0 if result.localized else 3
+
+
+#: ``localize --candidates``: at most this many places listed (the photo preset refines 16 poses a search).
+MAX_CANDIDATES = 50
+
+
+def places_text(places: list[dict], localized: bool) -> list[str]:
+    """A line per place of :meth:`~skyrender.localizer.LocalizationResult.places` for the text output."""
+    lines = []
+    for p in places:
+        where = f"lat {p['lat']:.5f}, lon {p['lon']:.5f}" if p["lat"] is not None else f"x={p['x']:.1f} y={p['y']:.1f}"
+        what = (f"the answer, confidence {p['confidence']:.2f}" if localized else
+                f"the answer withheld, confidence {p['confidence']:.2f}") if p["rank"] == 1 else \
+            f"{p['from_first_m'] / 1000:.1f} km from place 1"
+        lines.append(f"  place {p['rank']}: {where}, pan {p['pan']:.1f}, fov {p['fov']:.1f}; score {p['score_px']:.2f} px; "
+                     f"{what}")
+    return lines
+
+
+def places_geojson(places: list[dict]) -> list[dict]:
+    """GeoJSON Point features of :meth:`~skyrender.localizer.LocalizationResult.places` (lon/lat where known,
+    else world x, y), their ranks, scores and poses as properties."""
+    return [{"type": "Feature", "properties": {"kind": "candidate place", **{k: v for k, v in p.items() if k not in
+                                                                                ("lat", "lon")}},
+             "geometry": {"type": "Point", "coordinates": [p["lon"], p["lat"]] if p["lat"] is not None
+                          else [p["x"], p["y"]]}} for p in places]
 
 
 def second_opinion_text(second_opinion: dict | None, localized: bool, agree_m: float = 1000.0) -> str:

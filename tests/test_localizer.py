@@ -867,6 +867,75 @@ def test_cli_localize_prints_the_contract_json_and_writes_overlay_and_geojson(sc
                                                                                   "interfeature_visibility"}
 
 
+def test_a_result_lists_its_distinct_places_the_answer_first():
+    """``LocalizationResult.places``: the refined poses' distinct places (each farther than the given distance from
+    those before), the answer's first even where it is not the best-scoring, then by score; each with its fov from its
+    own focal length, its distance from the first, lat/lon only where a DEM with a CRS is given, and the confidence
+    (given or withheld) on the first alone."""
+    from skyrender.camera import horizontal_fov
+    from skyrender.dem import load_dem
+    from skyrender.localizer.pipeline import LocalizationResult, LocalizeStats
+
+    stats = LocalizeStats()
+    stats.refined_poses = [(5000, 0, 2, 10, 1, 0, 700.0, 1.4), (0, 0, 2, 20, 2, 0, 800.0, 1.1),
+                           (300, 0, 2, 21, 2, 0, 810.0, 1.2), (0, 9000, 2, 30, 3, 0, 600.0, 1.8)]
+    kept = Intrinsics.from_fov(50.0, 1000, 700)
+    withheld = LocalizationResult("abstained", None, None, 0.42, 9.0, 0, stats, kept)
+    places = withheld.places(5, 1000.0)
+    assert [(p["x"], p["y"]) for p in places] == [(0, 0), (5000, 0), (0, 9000)]  # 300 m from the best: its place
+    assert [p["rank"] for p in places] == [1, 2, 3] and places[0]["confidence"] == 0.42
+    assert all("confidence" not in p for p in places[1:])
+    assert places[1]["fov"] == pytest.approx(horizontal_fov(1000, 700.0)) and places[1]["score_px"] == 1.4
+    assert places[2]["from_first_m"] == pytest.approx(9000.0) and places[0]["lat"] is None
+    assert withheld.places(2, 1000.0) == places[:2] and withheld.places(0, 1000.0) == []
+    assert [p["x"] for p in withheld.places(5, 200.0)] == [0, 300, 5000, 0]  # nearer places kept apart
+    answer = LocalizationResult("localized", np.array([5000, 0, 2, 10, 1, 0.0]), 50.0, 0.97, 9.0, 0, stats, kept)
+    assert [p["x"] for p in answer.places(3, 1000.0)] == [5000, 0, 0]  # the answer first, as given
+    dem = load_dem("builtin:jacksboro")
+    lon, lat = dem.to_lonlat(5000.0, 0.0)
+    first = answer.places(1, 1000.0, dem)[0]
+    assert first["lon"] == pytest.approx(float(lon)) and first["lat"] == pytest.approx(float(lat))
+    assert first["confidence"] == 0.97
+    with pytest.raises(ValueError, match="places_apart_m"):
+        LocalizeParams.from_dict({"places_apart_m": 5.0})  # derived, not a field
+    render = LocalizeParams()
+    assert LocalizeParams.for_photos().places_apart_m == 1000.0 and render.places_apart_m == render.same_pose_m
+
+
+def test_cli_localize_lists_the_places_it_refined(scene, views, model_dir, tmp_path, capsys):
+    """``localize --candidates N``: with ``--json`` the contract's object plus ``"candidates"`` (the answer's place
+    first, with its confidence), in ``--geojson`` a point per place beside the camera; in the text output a line per
+    place; out of range: one line and exit 2."""
+    from skyrender.cli import places_text
+    from skyrender.viz import write_image
+
+    _, terrain, _ = scene
+    pose = views.poses[2]
+    write_image(tmp_path / "photo.png", _photo(terrain, pose))
+    code, out, err = _run(capsys, ["localize", tmp_path / "photo.png", "--model", model_dir, "--height", 2,
+                                   "--fov", 60, "--json", "--candidates", 3, "--geojson", tmp_path / "cam.geojson"])
+    assert code == 0, err
+    doc = json.loads(out)
+    places = doc.pop("candidates")
+    assert set(doc) == {"status", "x", "y", "z", "pan", "tilt", "swing", "fov", "lat", "lon", "crs", "confidence",
+                        "seconds", "hypotheses"}
+    assert 2 <= len(places) <= 3 and (places[0]["x"], places[0]["y"]) == (doc["x"], doc["y"])
+    assert places[0]["confidence"] == doc["confidence"] and places[0]["fov"] == pytest.approx(doc["fov"])
+    same_m = LocalizeParams().places_apart_m
+    assert all(p["from_first_m"] > same_m for p in places[1:])
+    geo = json.loads((tmp_path / "cam.geojson").read_text())
+    kinds = [f["properties"]["kind"] for f in geo["features"]]
+    assert kinds == ["camera", "view cone"] + ["candidate place"] * len(places)
+    assert geo["features"][2]["geometry"]["coordinates"] == pytest.approx([places[0]["lon"], places[0]["lat"]])
+    lines = places_text(places, True)
+    assert lines[0].startswith("  place 1: lat ") and lines[0].endswith(f"the answer, confidence {doc['confidence']:.2f}")
+    assert all(f"place {i + 1}:" in line and "km from place 1" in line for i, line in enumerate(lines) if i)
+    assert places_text(places[:1], False)[0].endswith(f"the answer withheld, confidence {doc['confidence']:.2f}")
+    code, out, err = _run(capsys, ["localize", tmp_path / "photo.png", "--model", model_dir, "--height", 2,
+                                   "--candidates", -1])
+    assert code == 2 and out == "" and err.startswith("skyrender: error: --candidates must lie in")
+
+
 def test_cli_localize_takes_an_exif_fov_as_given(scene, views, model_dir, tmp_path, capsys):
     """With ``--fov`` omitted, a photo's EXIF focal length (35 mm equivalent, whole millimetres: 30 mm is 59.97 deg
     here) is the fov, used as a given one: the answer keeps it (refitting it, ``refine_fov``, let wrong places fit it

@@ -521,6 +521,40 @@ def test_a_recall_interval_resamples_whole_places_not_photos():
     assert "known fov, 95 % interval with the 8 places resampled whole: within 100 m" in text
 
 
+def test_bench_real_counts_the_truth_among_the_places_localize_lists(tmp_path, capsys):
+    """``real_localize.places_offered``: how often the true position lies within 1 km of the first, or of one of
+    the first 3, distinct places refined (the answer's first, given or withheld: what ``localize --candidates``
+    lists); a row without refined poses is a miss. ``--retable`` prints it, and of a run that is not there says so
+    in one line (exit 2) instead of a traceback."""
+    from skyrender.benchmarks.real_localize import main, places_offered, table
+
+    def row(photo, poses):  # poses: (x, score) along one axis, 2 m up, the same view
+        return {"photo": photo, "fov_mode": "known", "status": "abstained", "confidence": 0.3, "seconds": 9.0,
+                "truth_xy": [0.0, 0.0], "refined_poses": [[x, 0, 2, 0, 0, 0, 900, s] for x, s in poses]}
+
+    rows = [row("a", [(300, 1.0), (20_000, 1.2)]),  # right first
+            row("b", [(20_000, 1.0), (20_400, 1.1), (500, 1.3)]),  # right third pose, second place (20.4 km is place 1)
+            row("c", [(20_000, 1.0), (30_000, 1.1), (40_000, 1.2), (600, 1.3)]),  # right, but the fourth place
+            row("d", []), {"photo": "e", "fov_mode": "known", "status": "abstained", "confidence": 0.0, "seconds": 1.0}]
+    offered = places_offered(rows)
+    assert offered == {"photos": 5, "right_m": 1000.0, "within": {"1": 1, "3": 2}}
+    assert places_offered(rows, (1, 4))["within"] == {"1": 1, "4": 3}
+    assert places_offered(rows, (1,), right_m=200.0)["within"] == {"1": 0}
+    text = table({"photos": [], "summary": {}, "places_offered": {"known": offered}})
+    assert "the truth within 1 km of the first on 1 of 5, of one of the first 3 on 2" in text
+
+    data_path("photos", "ch1")
+    assert main(["--side", "validation", "--tag", "none", "--out", str(tmp_path), "--retable"]) == 2
+    out = capsys.readouterr().out.strip().splitlines()
+    assert len(out) == 1 and out[0].startswith("--retable: no finished run bench-real-validation-none.json")
+    with open(tmp_path / "bench-real-validation-t.json", "w") as f:
+        json.dump({"commit": "abc", "cpus": 2, "side": "validation", "photos": [dict(r, photo=f"ch1/{r['photo']}")
+                                                                                for r in rows]}, f)
+    assert main(["--side", "validation", "--tag", "t", "--out", str(tmp_path), "--retable"]) == 0
+    report = json.loads((tmp_path / "bench-real-validation-t.json").read_text())
+    assert report["places_offered"]["known"]["within"] == {"1": 1, "3": 2}
+
+
 def test_the_extractor_benchmark_gives_its_shares_with_intervals_over_places():
     """``skyline_photos.summary`` with the photos' places: a CH1 place's photos are resampled together, a photo
     without a place (a Web photo) alone; without places, no interval."""

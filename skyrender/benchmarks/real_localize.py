@@ -13,7 +13,8 @@ length) or not (``unknown``). Reported per photo:
 error of the position (m), status, confidence, seconds (extraction included, model
 building not); and recall at 100 m / 250 m / 1 km (with its 95 % interval, the places resampled
 whole: :func:`place_intervals`), abstentions and confident answers more than 1 km wrong, the
-calibration of the confidence and a line per place.
+calibration of the confidence, how often the truth is among the places ``localize --candidates`` lists
+(:func:`places_offered`) and a line per place.
 """
 
 from __future__ import annotations
@@ -263,6 +264,29 @@ def place_intervals(rows: list[dict], place_of: dict[str, str], level: float = 0
     return out
 
 
+#: :func:`places_offered`: how many of the distinct places ``localize --candidates`` lists are counted.
+PLACES_OFFERED = (1, 3)
+
+
+def places_offered(rows: list[dict], ks: tuple[int, ...] = PLACES_OFFERED, right_m: float = 1000.0,
+                   apart_m: float = 1000.0) -> dict:
+    """What an analyst finds among the places ``skyrender localize --candidates K`` lists
+    (:meth:`~skyrender.localizer.LocalizationResult.places`: the distinct places refined, ``apart_m`` apart, the
+    answer's first, given or withheld): for each K of ``ks``, how many photos have their true position within
+    ``right_m`` of one of the first K. Rows without refined poses count as misses."""
+    from ..localizer.confidence import distinct_places
+
+    hits = dict.fromkeys(ks, 0)
+    for r in rows:
+        poses = refined_of(r)
+        if not len(poses) or r.get("truth_xy") is None:
+            continue
+        dist = np.hypot(*(poses[distinct_places(poses, max(ks), apart_m), :2] - np.asarray(r["truth_xy"])).T)
+        for k in ks:
+            hits[k] += bool((dist[:k] <= right_m).any())
+    return {"photos": len(rows), "right_m": right_m, "within": {str(k): n for k, n in hits.items()}}
+
+
 def refined_of(row: dict, max_slope_deg: float | None = None) -> np.ndarray:
     """The row's refined poses (K, 8: x, y, z, pan, tilt, swing, f_px, score) the answer is chosen
     among: those whose ground slopes at most ``max_slope_deg`` (default the row's own
@@ -374,7 +398,7 @@ def with_part_margins(rows: list[dict], items: dict, params=None) -> list[dict]:
     for row, it, terrain in with_terrain(missing, items):
         image, sky, weights = photo_skyline(it, params)
         row["part_margin"] = answer_part_margin(terrain, refined_of(row), sky, weights, image.shape[0],
-                                                params.runner_up_m or params.same_pose_m, params.score)
+                                                params.places_apart_m, params.score)
     return rows
 
 
@@ -524,6 +548,11 @@ def table(report: dict) -> str:
                              f"{b['from']:.2f}: {b['photos']}" + (f", {b['mean_confidence']:.2f}, {b['share_right']:.2f}"
                                                                   if b["photos"] else "") for b in cal["bins"])
                          + f"; Brier {cal['brier']:.3f}")
+    for m, offered in report.get("places_offered", {}).items():
+        first, *more = offered["within"].items()
+        lines.append(f"{m} fov, the places listed (localize --candidates; the answer's first, given or withheld): the "
+                     f"truth within {offered['right_m'] / 1000:.0f} km of the first on {first[1]} of {offered['photos']}"
+                     + "".join(f", of one of the first {k} on {n}" for k, n in more))
     for m, places in report.get("by_place", {}).items():
         lines.append(f"{m} fov by place (within 250 m / 1 km of photos, answered or withheld): " + ", ".join(
             f"{name.split('/')[-1]} {p['within_250m']} / {p['within_1000m']} of {p['photos']}" for name, p in places.items()))
@@ -585,8 +614,12 @@ def main(argv=None) -> int:
         params = LocalizeParams.from_dict({"min_confidence": 0.0, "min_confidence_fov_unknown": 0.0}, params)
     name = f"bench-real-{args.side}{'-' + args.tag if args.tag else ''}"
     if args.retable:  # rewrite the text table of a finished run from its JSON
-        with open(os.path.join(args.out, f"{name}.json")) as f:
-            report = json.load(f)
+        try:
+            with open(os.path.join(args.out, f"{name}.json")) as f:
+                report = json.load(f)
+        except (OSError, ValueError) as exc:
+            print(f"--retable: no finished run {name}.json in {args.out}: {exc}")
+            return 2
         if args.rescore:
             from ..localizer.confidence import PHOTO_CONFIDENCE_FILE, uses_part_margin
 
@@ -650,6 +683,7 @@ def main(argv=None) -> int:
     report["calibration"] = {m: calibration([r for r in report["photos"] if r["fov_mode"] == m]) for m in modes}
     report["intervals"] = {m: place_intervals([r for r in report["photos"] if r["fov_mode"] == m], place_of)
                            for m in modes}
+    report["places_offered"] = {m: places_offered([r for r in report["photos"] if r["fov_mode"] == m]) for m in modes}
     text = table(report)
     print(text)
     os.makedirs(args.out, exist_ok=True)

@@ -128,11 +128,13 @@ PART_COUNT = 2
 PART_PLACES = 4
 
 
-def distinct_places(poses: np.ndarray, k: int | None = None, apart_m: float = 1000.0) -> list[int]:
-    """Indices of refined poses (K, 8: ..., score last), best score first, each farther than ``apart_m``
-    (m) from every one taken before it: the distinct places a row's answer is chosen among; at most ``k``."""
+def distinct_places(poses: np.ndarray, k: int | None = None, apart_m: float = 1000.0, first: int | None = None) -> list[int]:
+    """Indices of refined poses (K, 8: ..., score last), best score first (pose ``first`` before all, where
+    given: an answer that is not the best-scoring), each farther than ``apart_m`` (m) from every one taken
+    before it: the distinct places a row's answer is chosen among; at most ``k``."""
     kept: list[int] = []
-    for i in np.argsort(poses[:, 7], kind="stable"):
+    order = np.argsort(poses[:, 7], kind="stable")
+    for i in order if first is None else [first, *order[order != first]]:
         if k is not None and len(kept) == k:
             break
         if all(np.hypot(*(poses[i, :2] - poses[j, :2])) > apart_m for j in kept):

@@ -37,7 +37,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..camera import Intrinsics
+from ..camera import Intrinsics, horizontal_fov
 from ..config import params_from_dict, params_to_dict
 from ..errors import InputError
 from ..features import ExtractedSkyline, extract_skyline, load_photo, skyline_peaks
@@ -55,6 +55,7 @@ from .confidence import (
     agreed_confidence,
     answer_part_margin,
     confidence_of,
+    distinct_places,
     margin_confidence,
     runner_up_index,
     uses_part_margin,
@@ -214,6 +215,12 @@ class LocalizeParams:
         if fov_unknown and self.min_confidence_fov_unknown is not None:
             return self.min_confidence_fov_unknown
         return self.min_confidence
+
+    @property
+    def places_apart_m(self) -> float:
+        """How far apart (m) two refined poses lie to be distinct places (the answer's part margin,
+        :meth:`LocalizationResult.places`): the confidence's runner-up distance, or ``same_pose_m`` without one."""
+        return self.runner_up_m or self.same_pose_m
 
     @classmethod
     def for_photos(cls) -> "LocalizeParams":
@@ -389,6 +396,37 @@ class LocalizationResult:
         return {"status": "localized", "x": x, "y": y, "z": z, "pan": pan, "tilt": tilt, "swing": swing,
                 "fov": self.fov, "lat": lat, "lon": lon, "crs": self.crs, "confidence": round(self.confidence, 4),
                 "seconds": round(self.seconds, 3), "hypotheses": self.hypotheses}
+
+    def places(self, k: int, apart_m: float, dem=None) -> list[dict]:
+        """The best ``k`` distinct places among the refined poses (``stats.refined_poses``), each farther than
+        ``apart_m`` (m) from those before it: the answer's first (given or withheld: the photo confidence's
+        runner-up is the second where ``apart_m`` is its distance), then by refined score. Each is a dict of its
+        pose (x, y, z m; pan, tilt, swing, fov deg), ``lat``/``lon`` (WGS 84, where ``dem`` has a CRS; else None),
+        ``score_px`` (its refined score: the mean column misfit, px of the searched skyline,
+        ``stats.searched_width`` wide), ``from_first_m`` and, for the first only, ``confidence`` (the
+        answer's, whether it reached the threshold or not; the others' have none). The places an analyst
+        checks when the localizer abstains, or doubts its answer."""
+        refined = np.asarray(self.stats.refined_poses, np.float64).reshape(-1, 8)
+        if k < 1 or not len(refined):
+            return []
+        first = None
+        if self.localized:  # the answer need not be the best-scoring refined pose (an accepted one, a slope bound)
+            first = int(np.argmin(np.hypot(*(refined[:, :2] - np.asarray(self.pose[:2], np.float64)).T)))
+        picked = refined[distinct_places(refined, k, apart_m, first)]
+        width = self.intrinsics.width if self.intrinsics is not None else None
+        lon, lat = (dem.to_lonlat(picked[:, 0], picked[:, 1]) if dem is not None and dem.crs is not None
+                    else (np.full(len(picked), np.nan),) * 2)
+        out = []
+        for i, p in enumerate(picked):
+            place = {"rank": i + 1, **dict(zip(("x", "y", "z", "pan", "tilt", "swing"), (float(v) for v in p[:6]))),
+                     "fov": horizontal_fov(width, p[6]) if width else None,
+                     "lat": float(lat[i]) if np.isfinite(lat[i]) else None,
+                     "lon": float(lon[i]) if np.isfinite(lon[i]) else None,
+                     "score_px": float(p[7]), "from_first_m": float(np.hypot(*(p[:2] - picked[0, :2])))}
+            if i == 0:
+                place["confidence"] = round(self.confidence, 4)
+            out.append(place)
+        return out
 
 
 @dataclass
@@ -1010,7 +1048,7 @@ def _answer(search: _Search, accepted: _Candidate | None) -> tuple[_Candidate | 
         refined = np.array([(*c.refined.pose, c.refined.f_px, c.refined.score) for c in done])
         with stats.timed("part_margin"):
             part = answer_part_margin(search.terrain, refined, search.sky, search.weights, H,
-                                      params.runner_up_m or params.same_pose_m, params.score)
+                                      params.places_apart_m, params.score)
         stats.part_margin = part
     return best, margin_confidence(best.refined.score, runner_up.score if runner_up else np.inf,
                                    params.margin_logit, W, part)
