@@ -309,11 +309,12 @@ def localize(
     fov = fov if from_exif is None else from_exif
     result = run_localize(photo, the_model, height, fov, prior, terrain=terrain, params=params,
                           curvature=not flat_earth)
+    places = result.places(candidates, params.places_apart_m, the_model.dem)
     if overlay is not None:
         from .features import as_rgb8
 
-        write_image(overlay, localization_overlay(as_rgb8(photo), result, the_model))
-    places = result.places(candidates, params.places_apart_m, the_model.dem)
+        write_image(overlay, localization_overlay(as_rgb8(photo), result, the_model,
+                                                  places=places_skylines(places, result, terrain)))
     if geojson is not None and (result.localized or places):
         doc = (camera_geojson(result.pose, result.fov, the_model.dem) if result.localized
                else {"type": "FeatureCollection", "features": []})
@@ -360,6 +361,21 @@ def places_text(places: list[dict], localized: bool) -> list[str]:
         lines.append(f"  place {p['rank']}: {where}, pan {p['pan']:.1f}, fov {p['fov']:.1f}; score {p['score_px']:.2f} px; "
                      f"{what}")
     return lines
+
+
+def places_skylines(places: list[dict], result, terrain) -> list[tuple[int, np.ndarray]]:
+    """(rank, skyline (W,) rendered from the place at the photo's size with the place's own fov) for the places of
+    :meth:`~skyrender.localizer.LocalizationResult.places`, for the overlay (one render for all of them)."""
+    from .camera import Intrinsics
+    from .render import render_skylines
+
+    if not places or result.intrinsics is None:
+        return []
+    W, H = result.intrinsics.width, result.intrinsics.height
+    poses = np.array([[p[k] for k in ("x", "y", "z", "pan", "tilt", "swing")] for p in places], np.float64)
+    k = np.array([[Intrinsics.from_fov(p["fov"], W, H).f_px, W / 2.0, H / 2.0] for p in places])
+    rendered = render_skylines(terrain, poses, Intrinsics(W, H, k[0, 0], W / 2.0, H / 2.0), per_pose_intrinsics=k)
+    return [(p["rank"], rendered[i]) for i, p in enumerate(places)]
 
 
 def places_geojson(places: list[dict]) -> list[dict]:

@@ -90,12 +90,32 @@ def place_labels(anchors: list[tuple[int, int]], sizes: list[tuple[int, int]], s
     return out
 
 
-def localization_overlay(image: np.ndarray, result, model, max_labels: int = 12) -> np.ndarray:
+#: Colours (RGB) of the places' skylines in :func:`localization_overlay`, by rank (the answer's place in the
+#: answer's green where it was given).
+PLACE_COLOURS = ((255, 140, 0), (0, 200, 255), (255, 0, 255), (255, 255, 255), (140, 90, 255))
+
+
+def localization_overlay(image: np.ndarray, result, model, max_labels: int = 12,
+                         places: list[tuple[int, np.ndarray]] = ()) -> np.ndarray:
     """The photo with the photo's skyline (red), the skyline rendered from the found
-    pose (green) and the model peaks in view, labelled "id elevation distance"."""
+    pose (green) and the model peaks in view, labelled "id elevation distance"; with ``places``
+    ((rank, skyline rendered from that place (W,)) of :meth:`LocalizationResult.places`) their skylines
+    too, thin, each in its rank's colour (:data:`PLACE_COLOURS`) and named in a key at the top left:
+    what an analyst compares by eye when the localizer abstains."""
     import cv2
 
     out = draw_skyline(image, result.image_skyline, (255, 0, 0), 2)
+    keys = []
+    for rank, skyline in places:
+        if rank == 1 and result.pose is not None:
+            continue  # the answer's: drawn below, in green
+        colour = PLACE_COLOURS[(rank - 1) % len(PLACE_COLOURS)]
+        out = draw_skyline(out, skyline, colour, 1)
+        keys.append((f"place {rank}" + (" (withheld)" if rank == 1 else ""), colour))
+    for i, (text, colour) in enumerate(keys):
+        y = 48 + 18 * i
+        cv2.putText(out, text, (10, y), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (40, 40, 40), 3, cv2.LINE_AA)
+        cv2.putText(out, text, (10, y), cv2.FONT_HERSHEY_SIMPLEX, 0.5, colour, 1, cv2.LINE_AA)
     if result.rendered_skyline is not None:
         out = draw_skyline(out, result.rendered_skyline, (0, 200, 0), 1)
     if result.pose is None:

@@ -931,9 +931,44 @@ def test_cli_localize_lists_the_places_it_refined(scene, views, model_dir, tmp_p
     assert lines[0].startswith("  place 1: lat ") and lines[0].endswith(f"the answer, confidence {doc['confidence']:.2f}")
     assert all(f"place {i + 1}:" in line and "km from place 1" in line for i, line in enumerate(lines) if i)
     assert places_text(places[:1], False)[0].endswith(f"the answer withheld, confidence {doc['confidence']:.2f}")
+    # the overlay draws the other places' skylines in their ranks' colours, named in a key
+    code, _, err = _run(capsys, ["localize", tmp_path / "photo.png", "--model", model_dir, "--height", 2, "--fov", 60,
+                                 "--candidates", 3, "--overlay", tmp_path / "places.png"])
+    assert code == 0, err
+    code, _, err = _run(capsys, ["localize", tmp_path / "photo.png", "--model", model_dir, "--height", 2, "--fov", 60,
+                                 "--overlay", tmp_path / "answer.png"])
+    assert code == 0, err
+    import cv2
+
+    with_places, alone = (cv2.imread(str(tmp_path / f))[..., ::-1].astype(int) for f in ("places.png", "answer.png"))
+    changed = np.abs(with_places - alone).sum(axis=2) > 0
+    assert changed[30:80, :120].any()  # the key, under the top-left corner
+    assert changed[:, 150:].sum() > 100  # and the other places' skylines
     code, out, err = _run(capsys, ["localize", tmp_path / "photo.png", "--model", model_dir, "--height", 2,
                                    "--candidates", -1])
     assert code == 2 and out == "" and err.startswith("skyrender: error: --candidates must lie in")
+
+
+def test_an_abstention_s_overlay_draws_the_places_withheld():
+    """``viz.localization_overlay`` with places: each place's skyline in its rank's colour and a key naming it
+    (an abstention's first place is "place 1 (withheld)"); without places, neither."""
+    from types import SimpleNamespace
+
+    from skyrender.viz import PLACE_COLOURS, localization_overlay
+
+    H, W = 120, 200
+    image = np.zeros((H, W, 3), np.uint8)
+    places = [(1, np.full(W, 80.5)), (2, np.full(W, 105.5))]  # on pixel centres: crisp lines
+    withheld = SimpleNamespace(image_skyline=np.full(W, 95.0), rendered_skyline=None, pose=None)
+    out = localization_overlay(image, withheld, None, places=places)
+    bare = localization_overlay(image, withheld, None)
+    for (rank, sky), colour in zip(places, PLACE_COLOURS):
+        v = int(sky[0])
+        near = out[v - 1: v + 2, 150].astype(float)
+        px = near[np.argmax(near.sum(axis=1))]  # an anti-aliased line: the colour, dimmed
+        assert px.max() > 100 and np.allclose(px / px.max(), np.divide(colour, max(colour)), atol=0.1), rank
+        assert not bare[v - 1: v + 2, 150].any()
+    assert (out[30:70, :110] != bare[30:70, :110]).any()  # the key under the "abstained" line
 
 
 def test_cli_localize_takes_an_exif_fov_as_given(scene, views, model_dir, tmp_path, capsys):

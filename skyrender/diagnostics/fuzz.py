@@ -248,6 +248,8 @@ def _bad_flags(rng: np.random.Generator, dem: str, image: str, model: str) -> li
         cases.append(Case(f"localize --height={v!r}", ["localize", image, "--model", model, "--height", v]))
         cases.append(Case(f"localize --prior-near={v!r}", ["localize", image, "--model", model, "--height", "2",
                                                           "--prior-near", v]))
+        cases.append(Case(f"localize --candidates={v!r}", ["localize", image, "--model", model, "--height", "2",
+                                                          "--candidates", v]))
         cases.append(Case(f"model --k={v!r}", ["model", dem, "--out", "m", "--k", v], ("m",)))
         cases.append(Case(f"model --spacing={v!r}", ["model", dem, "--out", "m", "--spacing", v], ("m",)))
     for out in ("x.txt", "nodir/x.png", "", "."):
