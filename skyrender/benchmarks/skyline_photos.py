@@ -262,8 +262,10 @@ def mixture_fit_speed(items, repeats: int = 3) -> dict:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", default=DEFAULT_PHOTOS)
-    parser.add_argument("--sides", nargs="+", default=["validation", "heldout"])
-    parser.add_argument("--methods", nargs="+", default=["select", "hybrid", "net", "gmm", "otsu"])
+    parser.add_argument("--sides", nargs="+", default=["validation", "heldout"],
+                        choices=["train", "dev", "validation", "heldout"])
+    parser.add_argument("--methods", nargs="+", default=["select", "hybrid", "net", "gmm", "otsu"],
+                        choices=["select", "hybrid", "net", "gmm", "otsu"])
     parser.add_argument("--limit", type=int, default=0, help="at most this many photos per side (0: all)")
     parser.add_argument("--out", default=os.path.join(REPO, "experiments", "photos"))
     parser.add_argument("--retable", action="store_true",
