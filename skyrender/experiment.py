@@ -257,7 +257,7 @@ def result_row(truth: np.ndarray, result, seconds: float, **extra) -> dict:
 
 def _withheld_answer(refined_poses: list) -> list[float] | None:
     """The pose (6,) of the best-scored refined candidate ([x, y, z, pan, tilt, swing, f_px, score px]
-    rows, :class:`~skyrender.localizer.pipeline.LocalizeStats`), None when none was refined."""
+    rows, :class:`~skyrender.localizer.result.LocalizeStats`), None when none was refined."""
     if not refined_poses:
         return None
     best = min(refined_poses, key=lambda r: r[7])

@@ -104,7 +104,7 @@ def test_a_result_row_of_an_abstention_keeps_the_withheld_answer_and_its_error()
     """An abstention's row names the best-scored refined candidate (the place an analyst checks next) and its
     error, so an experiment can count what was withheld; an answer's row has no such fields."""
     from skyrender.experiment import result_row
-    from skyrender.localizer.pipeline import LocalizationResult, LocalizeStats
+    from skyrender.localizer.result import LocalizationResult, LocalizeStats
 
     stats = LocalizeStats(best_score=1.5, runner_up_score=1.6,
                           refined_poses=[[300.0, 400.0, 9.0, 10.0, 1.0, 0.0, 800.0, 2.5],

@@ -874,7 +874,7 @@ def test_a_result_lists_its_distinct_places_the_answer_first():
     (given or withheld) on the first alone."""
     from skyrender.camera import horizontal_fov
     from skyrender.dem import load_dem
-    from skyrender.localizer.pipeline import LocalizationResult, LocalizeStats
+    from skyrender.localizer.result import LocalizationResult, LocalizeStats
 
     stats = LocalizeStats()
     stats.refined_poses = [(5000, 0, 2, 10, 1, 0, 700.0, 1.4), (0, 0, 2, 20, 2, 0, 800.0, 1.1),
@@ -1325,7 +1325,8 @@ def test_a_telephoto_range_searched_apart_when_the_fov_is_unknown():
     every refinement."""
     from dataclasses import replace
 
-    from skyrender.localizer.pipeline import PHOTO_TELEPHOTO_FOVS, PHOTO_TELEPHOTO_STEPS, _Candidate, _narrow_fov, _next_to_refine
+    from skyrender.localizer.params import PHOTO_TELEPHOTO_FOVS, PHOTO_TELEPHOTO_STEPS
+    from skyrender.localizer.pipeline import _Candidate, _narrow_fov, _next_to_refine
 
     params = replace(LocalizeParams.for_photos(), telephoto_fovs=PHOTO_TELEPHOTO_FOVS,
                      telephoto_fov_step=PHOTO_TELEPHOTO_STEPS)

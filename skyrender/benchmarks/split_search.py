@@ -23,7 +23,8 @@ from ..dem.synthetic import fractal_terrain
 from ..evaluate import REPO
 from ..localizer import localize
 from ..localizer.hypotheses import generate_hypotheses
-from ..localizer.pipeline import LocalizeParams, image_peaks
+from ..localizer.params import LocalizeParams
+from ..localizer.pipeline import image_peaks
 from ..localizer.pose_solver import solve_poses
 from ..model import build_model
 from ..render import Terrain, render_skylines

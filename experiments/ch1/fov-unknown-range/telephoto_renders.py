@@ -5,7 +5,7 @@ from skyrender.benchmarks.views import sample_views
 from skyrender.camera import Intrinsics
 from skyrender.dem.synthetic import fractal_terrain
 from skyrender.localizer import LocalizeParams, localize
-from skyrender.localizer.pipeline import PHOTO_TELEPHOTO_FOVS, PHOTO_TELEPHOTO_STEPS
+from skyrender.localizer.params import PHOTO_TELEPHOTO_FOVS, PHOTO_TELEPHOTO_STEPS
 from skyrender.model import build_model
 from skyrender.render import Terrain
 from skyrender.render.photo import Look, render_photo

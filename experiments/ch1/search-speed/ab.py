@@ -25,7 +25,8 @@ from skyrender.datasets.real_photos import items_on_side
 from skyrender.evaluate import git_commit
 from skyrender.features import load_photo
 from skyrender.localizer import LocalizeParams, horizon_search
-from skyrender.localizer.pipeline import PHOTO_FOV_CANDIDATES, _image_skyline, reduce_skyline
+from skyrender.localizer.params import PHOTO_FOV_CANDIDATES
+from skyrender.localizer.pipeline import _image_skyline, reduce_skyline
 
 
 def whole_arrays(spectra, n_bins, bins, elevation, weights, bin_deg, k, terms=3, max_swing_deg=np.inf):

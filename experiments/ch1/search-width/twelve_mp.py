@@ -12,7 +12,7 @@ from dataclasses import replace
 from skyrender.benchmarks.real_localize import photo_scaled_up, with_place
 from skyrender.datasets.real_photos import items_on_side
 from skyrender.localizer import LocalizeParams, localize
-from skyrender.localizer.pipeline import peak_rss_mb
+from skyrender.localizer.result import peak_rss_mb
 
 
 def main(keys: list[str], scaled_only: bool = False) -> None:
