@@ -331,3 +331,16 @@ def test_dataset_views_never_stand_on_or_look_at_invented_terrain(tmp_path):
                 sky, distance = render_skylines(terrain, pose, intrinsics, with_distance=True)
                 assert invented_skyline_share(dem, pose, intrinsics, sky, distance) <= MAX_INVENTED_SKYLINE_SHARE
     assert on_invented["masked"] == 0 and on_invented["unmasked"] >= 1
+
+
+def test_a_figure_s_provenance_names_the_libraries_that_move_it():
+    import scipy
+
+    from skyrender.evaluate import provenance, versions_line
+
+    info = provenance(seed=3)
+    assert info["seed"] == 3 and info["cpus"] == os.cpu_count()
+    assert info["versions"]["numpy"] == np.__version__ and info["versions"]["scipy"] == scipy.__version__
+    line = versions_line(info["versions"])
+    assert f"numpy {np.__version__}" in line and "python " in line
+    assert versions_line(None) == "versions not recorded"

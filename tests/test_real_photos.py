@@ -413,7 +413,7 @@ def test_bench_real_retables_a_run_of_one_fov_mode(tmp_path):
                    "merged": {"fov unknown": "the run at def"}}, f)
     assert main(["--side", "validation", "--tag", "t", "--out", str(tmp_path), "--retable"]) == 0
     head = (tmp_path / "bench-real-validation-t.txt").read_text().splitlines()[0]
-    assert head == "commit abc, 2 CPUs, side validation; rows merged: fov unknown: the run at def"
+    assert head == "commit abc, 2 CPUs (versions not recorded), side validation; rows merged: fov unknown: the run at def"
 
 
 def test_bench_real_rescores_a_run_under_another_fit_and_refuses_a_bad_one(tmp_path, capsys):
