@@ -162,13 +162,14 @@ def git_commit(short: bool = True) -> str:
         return "unknown"
 
 
-# the libraries whose versions move figures: the same code and seed on another numpy or scipy can refine a pose a few
-# decimetres apart (2026-12-07: _dsc0071 177 m from the truth against 161 m, the same commit, a fresh install)
+# the libraries whose versions move figures: the same code and seed on another install or CPU refined CH1 poses up to
+# 46 m apart and moved no verdict (2026-12-07, experiments/ch1/env-2026-12-07/)
 FIGURE_LIBRARIES = ("numpy", "scipy", "mitsuba", "drjit", "opencv-python-headless", "numba", "pillow", "rasterio")
 
 
 def library_versions() -> dict:
-    """Python's and :data:`FIGURE_LIBRARIES`' installed versions (``None`` for one not installed)."""
+    """Python's and :data:`FIGURE_LIBRARIES`' installed versions (``None`` for one not installed) and the CPU
+    (:func:`cpu_description`)."""
     import platform
     from importlib.metadata import PackageNotFoundError, version
 
@@ -178,14 +179,32 @@ def library_versions() -> dict:
         except PackageNotFoundError:
             return None
 
-    return {"python": platform.python_version(), **{name: installed(name) for name in FIGURE_LIBRARIES}}
+    return {"python": platform.python_version(), **{name: installed(name) for name in FIGURE_LIBRARIES},
+            "cpu": cpu_description()}
+
+
+def cpu_description() -> str:
+    """The CPU's model and the vector extensions the JIT-compiled kernels (Dr.Jit's LLVM, numba) and BLAS choose by,
+    e.g. ``AMD EPYC (avx2, fma)``: the same code can round differently on another CPU. Linux's ``/proc/cpuinfo``;
+    ``platform.processor()`` elsewhere."""
+    import platform
+
+    try:
+        with open("/proc/cpuinfo") as f:
+            info = f.read()
+    except OSError:
+        return platform.processor() or "unknown"
+    model = next((line.split(":", 1)[1].strip() for line in info.splitlines() if line.startswith("model name")), "unknown")
+    flags = set(next((line.split(":", 1)[1].split() for line in info.splitlines() if line.startswith("flags")), []))
+    vector = [f for f in ("avx512f", "avx2", "fma", "neon") if f in flags]
+    return f"{model} ({', '.join(vector) or 'no wide vectors'})"
 
 
 def versions_line(versions: dict | None) -> str:
     """``numpy 2.4.6, scipy 1.17.1, …`` for a table's header (``versions not recorded`` for an older run)."""
     if not versions:
         return "versions not recorded"
-    return ", ".join(f"{name} {v}" for name, v in versions.items() if v is not None)
+    return ", ".join(f"{name} {v}" if name != "cpu" else v for name, v in versions.items() if v is not None)
 
 
 def provenance(**extra) -> dict:
