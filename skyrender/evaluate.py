@@ -168,8 +168,7 @@ FIGURE_LIBRARIES = ("numpy", "scipy", "mitsuba", "drjit", "opencv-python-headles
 
 
 def library_versions() -> dict:
-    """Python's and :data:`FIGURE_LIBRARIES`' installed versions (``None`` for one not installed) and the CPU
-    (:func:`cpu_description`)."""
+    """Python's and :data:`FIGURE_LIBRARIES`' installed versions (``None`` for one not installed)."""
     import platform
     from importlib.metadata import PackageNotFoundError, version
 
@@ -179,42 +178,51 @@ def library_versions() -> dict:
         except PackageNotFoundError:
             return None
 
-    return {"python": platform.python_version(), **{name: installed(name) for name in FIGURE_LIBRARIES},
-            "cpu": cpu_description()}
+    return {"python": platform.python_version(), **{name: installed(name) for name in FIGURE_LIBRARIES}}
 
 
 def cpu_description() -> str:
     """The CPU's model and the vector extensions the JIT-compiled kernels (Dr.Jit's LLVM, numba) and BLAS choose by,
-    e.g. ``AMD EPYC (avx2, fma)``: the same code can round differently on another CPU. Linux's ``/proc/cpuinfo``;
-    ``platform.processor()`` elsewhere."""
+    e.g. ``AMD EPYC (avx2, fma)``: the same code can round differently on another CPU. Linux's ``/proc/cpuinfo``
+    (``flags`` on x86, ``Features`` on ARM); ``platform.processor()`` elsewhere."""
     import platform
 
     try:
         with open("/proc/cpuinfo") as f:
-            info = f.read()
+            lines = f.read().splitlines()
     except OSError:
         return platform.processor() or "unknown"
-    model = next((line.split(":", 1)[1].strip() for line in info.splitlines() if line.startswith("model name")), "unknown")
-    flags = set(next((line.split(":", 1)[1].split() for line in info.splitlines() if line.startswith("flags")), []))
-    vector = [f for f in ("avx512f", "avx2", "fma", "neon") if f in flags]
-    return f"{model} ({', '.join(vector) or 'no wide vectors'})"
+    first = {}
+    for key, _, value in (line.partition(":") for line in lines):
+        first.setdefault(key.strip(), value.strip())
+    flags = set((first.get("flags") or first.get("Features") or "").split())
+    vector = [f for f in ("avx512f", "avx2", "fma", "asimd") if f in flags]
+    return f"{first.get('model name', 'unknown')} ({', '.join(vector) or 'no wide vectors'})"
 
 
 def versions_line(versions: dict | None) -> str:
     """``numpy 2.4.6, scipy 1.17.1, …`` for a table's header (``versions not recorded`` for an older run)."""
     if not versions:
         return "versions not recorded"
-    return ", ".join(f"{name} {v}" if name != "cpu" else v for name, v in versions.items() if v is not None)
+    return ", ".join(f"{name} {v}" for name, v in versions.items() if v is not None)
+
+
+def machine_line(report: dict) -> str:
+    """``2 CPUs (AMD EPYC (avx2, fma); python 3.11.7, numpy 2.4.6, …)``: a benchmark report's ``cpus``,
+    ``cpu_model`` (:func:`cpu_description`) and ``versions`` (:func:`versions_line`) for its header; an older
+    report without them says so."""
+    model = f"{report['cpu_model']}; " if report.get("cpu_model") else ""
+    return f"{report['cpus']} CPUs ({model}{versions_line(report.get('versions'))})"
 
 
 def provenance(**extra) -> dict:
-    """Where a figure comes from: git commit, skyrender version, Mitsuba variant, CPU count, the libraries'
+    """Where a figure comes from: git commit, skyrender version, Mitsuba variant, CPU count and model, the libraries'
     versions (:func:`library_versions`), plus ``extra`` (parameters, seeds)."""
     from . import __version__
     from .backend import requested_variant
 
     return {"commit": git_commit(), "skyrender": __version__, "variant": requested_variant(), "cpus": os.cpu_count(),
-            "versions": library_versions(), **extra}
+            "cpu_model": cpu_description(), "versions": library_versions(), **extra}
 
 
 def provenance_header(info: dict) -> str:

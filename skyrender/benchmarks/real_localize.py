@@ -30,7 +30,7 @@ import numpy as np
 from ..camera import horizontal_fov
 from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side, photo_items, split_places
 from ..diagnostics.oracle import DEM_DIR, tiles_around
-from ..evaluate import git_commit, library_versions, place_interval, position_errors, versions_line
+from ..evaluate import cpu_description, git_commit, library_versions, machine_line, place_interval, position_errors
 
 HALF_LAT, HALF_LON = 0.6, 0.7  # degrees either side of the place's centre
 RECALL_M = (100.0, 250.0, 1000.0)
@@ -671,8 +671,8 @@ def main(argv=None) -> int:
         commit = git_commit()  # the code that runs, not what the tree holds when the run ends
         rows = run(items, args.fov, params=params, unknown_every=max(1, args.unknown_every), done=done, on_row=append_row,
                    model_params=model_params, true_skyline=args.true_skyline)
-        report = {"commit": commit, "cpus": os.cpu_count(), "versions": library_versions(), "side": args.side,
-                  "photos": rows}
+        report = {"commit": commit, "cpus": os.cpu_count(), "cpu_model": cpu_description(), "versions": library_versions(),
+                  "side": args.side, "photos": rows}
         if args.set or args.no_abstain or args.model_set or args.true_skyline:
             report["overrides"] = {"set": json.loads(args.set) if args.set else None, "no_abstain": args.no_abstain,
                                    "model_set": json.loads(args.model_set) if args.model_set else None,
@@ -691,7 +691,7 @@ def main(argv=None) -> int:
     with open(os.path.join(args.out, f"{name}.json"), "w") as f:
         json.dump(report, f, indent=1)
     with open(os.path.join(args.out, f"{name}.txt"), "w") as f:
-        head = f"commit {report['commit']}, {report['cpus']} CPUs ({versions_line(report.get('versions'))}), side {args.side}"
+        head = f"commit {report['commit']}, {machine_line(report)}, side {args.side}"
         if "overrides" in report:
             head += f"; photo preset with {json.dumps(report['overrides'])}"
         if "merged" in report:  # modes from two runs (one mode's code unchanged between them)

@@ -28,7 +28,7 @@ import time
 import numpy as np
 
 from ..datasets.real_photos import DEFAULT_PHOTOS, REPO, items_on_side, split_places
-from ..evaluate import git_commit, library_versions, place_interval, versions_line
+from ..evaluate import cpu_description, git_commit, library_versions, machine_line, place_interval
 
 TARGET_MEDIAN_PX, TARGET_WITHIN5 = 2.0, 0.95
 GOAL_SHARE, GOAL_MEAN, GOAL_FLOOR = 0.90, 0.97, 0.60  # issue 18: on photos not used for fitting
@@ -282,8 +282,8 @@ def main(argv=None) -> int:
     if not os.path.isdir(args.data):
         print(f"no photos at {args.data}")
         return 2
-    report = {"commit": git_commit(), "cpus": os.cpu_count(), "versions": library_versions(), "methods": args.methods,
-              "sides": {}}
+    report = {"commit": git_commit(), "cpus": os.cpu_count(), "cpu_model": cpu_description(), "versions": library_versions(),
+              "methods": args.methods, "sides": {}}
     for side in args.sides:
         items = items_on_side(side, args.data)
         if args.limit:
@@ -351,7 +351,7 @@ def _write(report: dict, out_dir: str) -> int:
     with open(os.path.join(out_dir, "bench-skyline.json"), "w") as f:
         json.dump(report, f, indent=1)
     with open(os.path.join(out_dir, "bench-skyline.txt"), "w") as f:
-        f.write(f"commit {report['commit']}, {report['cpus']} CPUs ({versions_line(report.get('versions'))})\n\n{text}\n")
+        f.write(f"commit {report['commit']}, {machine_line(report)}\n\n{text}\n")
     return 0
 
 
