@@ -278,15 +278,41 @@ def test_colour_mixture_of_one_flat_colour_fits_quietly():
 
 def test_mixture_density_is_scikit_learns_and_the_same_to_the_bit_on_one_core_or_all(monkeypatch):
     """The colour mixtures' log density (two matrix products per chunk of pixels, the chunks on
-    all cores) is what scikit-learn's ``score_samples`` gives, and the threads change no bit."""
+    all cores) is what scikit-learn's ``score_samples`` gives, to 1e-9 from float64 rows and to
+    1e-4 of its size from float32 rows (what a photo's every pixel is scored from), and the threads
+    change no bit of either."""
     rng = np.random.default_rng(3)
     samples = np.concatenate([rng.normal(c, 1.0 + c / 4, (600, 6)) for c in range(5)])
     gmm = _fit_gmm(samples, 5, seed=0)
     x = rng.normal(2.0, 3.0, (70_001, 6))  # two chunks of 30,000 rows and a short one
+    theirs = _scikit_learn_mixture(samples, 0).score_samples(x)
     threaded = mixture_log_density(gmm, x, chunk=30_000)
-    np.testing.assert_allclose(threaded, _scikit_learn_mixture(samples, 0).score_samples(x), rtol=0, atol=1e-9)
+    threaded32 = mixture_log_density(gmm, x.astype(np.float32), chunk=30_000)
+    assert threaded.dtype == np.float64 and threaded32.dtype == np.float32
+    np.testing.assert_allclose(threaded, theirs, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(threaded32, theirs, rtol=1e-4, atol=1e-4)
+    assert np.abs(threaded32 - theirs).max() > 1e-9  # float32 arithmetic indeed, not float64 cast at the end
     monkeypatch.setattr("os.cpu_count", lambda: 1)
     assert np.array_equal(mixture_log_density(gmm, x, chunk=30_000), threaded)
+    assert np.array_equal(mixture_log_density(gmm, x.astype(np.float32), chunk=30_000), threaded32)
+
+
+def test_the_mixtures_fit_the_same_float64_rows_they_always_did():
+    """The fits' samples are the pixels' float64 rows (features and image row), picked pixel by pixel; the
+    densities' float32 rows for every pixel are those rows rounded: a fit is the same to the bit whichever
+    rows the densities use."""
+    from skyrender.features.sky import ROW_WEIGHT, mixture_inputs, pixel_features
+
+    features = pixel_features(drawn_sky_photo())
+    H, W, C = features.shape
+    every = mixture_inputs(features)
+    expected = np.column_stack([features.reshape(-1, C).astype(np.float64),
+                                np.repeat((np.arange(H) + 0.5) / H * ROW_WEIGHT, W)])
+    assert every.dtype == np.float64 and np.array_equal(every, expected)
+    pixels = np.random.default_rng(0).choice(H * W, 500, replace=False)
+    assert np.array_equal(mixture_inputs(features, pixels=pixels), expected[pixels])
+    assert np.array_equal(mixture_inputs(features, dtype=np.float32), expected.astype(np.float32))
+    assert mixture_inputs(features, 0.0).shape == (H * W, C)
 
 
 def test_sky_probability_fits_its_two_mixtures_the_same_on_one_core_or_all(monkeypatch):
@@ -310,20 +336,21 @@ def test_sky_probability_fits_its_two_mixtures_the_same_on_one_core_or_all(monke
 
 def test_work_on_a_block_thread_runs_its_own_blocks_and_calls_in_turn(monkeypatch):
     """``blocks.concurrently`` and ``blocks.in_blocks`` start threads (a core each), but not from
-    one of their own workers: there the cores are its siblings', and nested work (the photo
-    extractor's mixtures inside each of its two skylines) runs in that worker's thread, in order."""
+    one of their own workers while its siblings work on the other cores: nested work (the photo
+    extractor's mixtures inside each of its two skylines) then runs in that worker's thread, in order."""
     import threading
 
     from skyrender.blocks import concurrently, in_blocks
 
     monkeypatch.setattr("os.cpu_count", lambda: 2)
-    barrier = threading.Barrier(2, timeout=10)  # both outer calls must be running at once
+    barrier = threading.Barrier(2, timeout=10)  # both outer calls must be running at once, start to end
 
     def outer(name):
         barrier.wait()
         seen = []
         in_blocks(10, 3, lambda lo, hi: seen.append((lo, threading.get_ident())))
         inner = concurrently(lambda: threading.get_ident(), lambda: threading.get_ident())
+        barrier.wait()
         return name, threading.get_ident(), seen, inner
 
     results = concurrently(lambda: outer("a"), lambda: outer("b"))
@@ -335,6 +362,78 @@ def test_work_on_a_block_thread_runs_its_own_blocks_and_calls_in_turn(monkeypatc
     at_top = []
     in_blocks(4, 1, lambda lo, hi: (barrier.wait(), at_top.append(threading.get_ident())))
     assert len(set(at_top)) == 2  # from the caller's thread, blocks run on two threads at once
+
+
+def test_a_core_a_sibling_is_done_with_goes_to_the_nested_work_of_the_one_still_running(monkeypatch):
+    """Once one of two workers has returned, the other's nested blocks and calls run on two threads at once
+    (the photo extractor's longer line spreads over both cores when the shorter is done), with the values
+    of running them in turn; while both work, the nested work stays in its own thread."""
+    import threading
+
+    from skyrender.blocks import concurrently, in_blocks
+
+    monkeypatch.setattr("os.cpu_count", lambda: 2)
+    short_done = threading.Event()
+    both = threading.Barrier(2, timeout=10)
+
+    def short():
+        both.wait()
+        return "short"
+
+    def long():
+        both.wait()
+        while_both = concurrently(lambda: threading.get_ident(), lambda: threading.get_ident())
+        short_done.wait(timeout=10)
+        pair = threading.Barrier(2, timeout=10)  # passes only with two blocks running at once
+        blocks = {}
+        in_blocks(4, 2, lambda lo, hi: (pair.wait(), blocks.__setitem__(lo, threading.get_ident())))
+        calls = concurrently(lambda: (pair.wait(), threading.get_ident())[1], lambda: (pair.wait(), threading.get_ident())[1])
+        return threading.get_ident(), while_both, blocks, calls
+
+    def short_then_signal():
+        try:
+            return short()
+        finally:
+            threading.Timer(0.05, short_done.set).start()  # after this worker has counted itself done
+
+    results = concurrently(short_then_signal, long)
+    ident, while_both, blocks, calls = results[1]
+    assert results[0] == "short"
+    assert while_both == [ident, ident]  # both working: nested calls ran in the worker's own thread
+    assert sorted(blocks) == [0, 2] and len(set(blocks.values())) == 2
+    assert len(set(calls)) == 2
+
+
+def test_one_thread_holds_blas_to_one_thread_and_gives_back_what_was_there():
+    """``blocks.one_thread`` limits the pools threadpoolctl knows as its ``threadpool_limits(1)`` does,
+    restores them after, and looks the libraries up again once more modules are imported."""
+    import sys
+
+    from threadpoolctl import threadpool_info
+
+    from skyrender import blocks
+
+    def blas_threads():
+        return sorted(lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas")
+
+    before = blas_threads()
+    assert before  # numpy's BLAS at least
+    with blocks.one_thread("blas"):
+        assert set(blas_threads()) == {1}
+    with blocks.one_thread():
+        assert set(blas_threads()) == {1}
+    assert blas_threads() == before
+    made = blocks._controller[1]
+    with blocks.one_thread("blas"):
+        pass
+    assert blocks._controller[1] is made  # kept while no module was imported
+    sys.modules["skyrender_test_new_module"] = sys  # as if a module were imported
+    try:
+        with blocks.one_thread("blas"):
+            pass
+        assert blocks._controller[1] is not made
+    finally:
+        del sys.modules["skyrender_test_new_module"]
 
 
 def drawn_sky_photo() -> np.ndarray:

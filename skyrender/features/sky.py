@@ -71,15 +71,14 @@ def _fit_gmm(samples: np.ndarray, components: int, seed: int) -> Mixture:
     products instead of several passes per component. The k-means start is scikit-learn's too
     (:mod:`.kmeans`), without importing it.
     """
-    from threadpoolctl import threadpool_limits
-
+    from ..blocks import one_thread
     from .kmeans import kmeans_labels
 
     x = np.asarray(samples, np.float64)
     n = int(min(components, max(1, len(x) // 50)))
     # one thread: the fit's matrices are a few thousand by 6, and BLAS / OpenMP threads on them
     # cost more than they share (a fit 3x faster on 2 cores; the same fit to the bit)
-    with threadpool_limits(1):
+    with one_thread():
         labels = kmeans_labels(x, n, seed)
         centre = x.mean(axis=0)
         x = x - centre  # fitted centred (covariances from outer products), the means moved back at the end
@@ -158,22 +157,23 @@ def _logsumexp_columns(a: np.ndarray) -> np.ndarray:
 
 
 def mixture_log_density(m: Mixture, x: np.ndarray, chunk: int = 65_536) -> np.ndarray:
-    """(N,) log density of a fitted mixture (:func:`_fit_gmm`) at the rows of ``x`` (N, D): what
-    scikit-learn's ``score_samples`` gives for the same mixture (to 1e-12), with every component
-    in two matrix products per chunk of rows instead of a pass per component (3.5x faster on a
-    photo). The chunks run on all cores (:func:`~skyrender.blocks.in_blocks`), each row's value
-    computed as in one chunk at a time, to the bit."""
-    from threadpoolctl import threadpool_limits
+    """(N,) log density of a fitted mixture (:func:`_fit_gmm`) at the rows of ``x`` (N, D), computed in
+    ``x``'s dtype, with every component in two matrix products per chunk of rows instead of a pass per
+    component (3.5x faster on a photo). float64 rows give scikit-learn's ``score_samples`` for the same
+    mixture (to 1e-12); float32 rows, what :func:`sky_probability` passes for a photo's every pixel, give
+    it to ~1e-4 in about 0.6 of the time (half the bytes through memory, numpy's float32 ``exp``), and
+    the same skylines (``experiments/photos/float32-densities/``). The chunks run on all cores
+    (:func:`~skyrender.blocks.in_blocks`), each row's value computed as in one chunk at a time, to the bit."""
+    from ..blocks import in_blocks, one_thread
 
-    from ..blocks import in_blocks
-
-    terms = _log_density_terms(m)
-    out = np.empty(len(x))
+    dtype = np.float32 if x.dtype == np.float32 else np.float64
+    terms = tuple(t.astype(dtype, copy=False) for t in _log_density_terms(m))
+    out = np.empty(len(x), dtype)
 
     def rows(start: int, stop: int) -> None:
         out[start:stop] = _logsumexp_columns(_weighted_log_prob(x[start:stop], m, terms))
 
-    with threadpool_limits(1, user_api="blas"):  # the chunks are the threads; BLAS threads inside them would fight
+    with one_thread("blas"):  # the chunks are the threads; BLAS threads inside them would fight
         in_blocks(len(x), chunk, rows)
     return out
 
@@ -276,14 +276,19 @@ def hazy_ridge_logit(features: np.ndarray, field: np.ndarray, sigma: float, weig
 ROW_WEIGHT = 20.0
 
 
-def mixture_inputs(features: np.ndarray, row_weight: float = ROW_WEIGHT) -> np.ndarray:
-    """(H*W, C [+ 1]) float64 rows the colour mixtures see: each pixel's features (H, W, C) and,
-    with a ``row_weight``, its row scaled to [0, row_weight] (sky colour changes with elevation angle)."""
+def mixture_inputs(features: np.ndarray, row_weight: float = ROW_WEIGHT, *, pixels: np.ndarray | None = None,
+                   dtype=np.float64) -> np.ndarray:
+    """(N, C [+ 1]) rows the colour mixtures see, in ``dtype``: the features (H, W, C) of the pixels at flat
+    indices ``pixels`` (None: every pixel, N = H * W) and, with a ``row_weight``, each one's image row scaled to
+    [0, row_weight] (sky colour changes with elevation angle; computed in float64 before any cast)."""
     H, W, C = features.shape
-    x = np.empty((H * W, C + 1 if row_weight else C))
-    x[:, :C] = features.reshape(-1, C)
+    flat = features.reshape(-1, C)
+    n = H * W if pixels is None else len(pixels)
+    x = np.empty((n, C + 1 if row_weight else C), dtype)
+    x[:, :C] = flat if pixels is None else flat[pixels]
     if row_weight:
-        x[:, C] = np.repeat((np.arange(H) + 0.5) / H * row_weight, W)
+        image_row = np.repeat(np.arange(H), W) if pixels is None else pixels // W
+        x[:, C] = (image_row + 0.5) / H * row_weight
     return x
 
 
@@ -294,28 +299,26 @@ def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np
 
     ``row_prior`` (H,) is the prior P(sky) per row. Deterministic for a seed.
     """
-    from threadpoolctl import threadpool_limits
-
-    from ..blocks import concurrently
+    from ..blocks import concurrently, one_thread
 
     H, W = features.shape[:2]
     rng = np.random.default_rng(seed)
-    x = mixture_inputs(features, row_weight)
 
-    def pick(mask):
+    def pick(mask):  # float64 samples: the fits as they were before the densities went float32, to the bit
         idx = np.flatnonzero(mask.ravel())
         if len(idx) > max_samples:
             idx = rng.choice(idx, max_samples, replace=False)
-        return x[idx]
+        return mixture_inputs(features, row_weight, pixels=idx)
 
     s, t = pick(sky_mask), pick(terrain_mask)
     if len(s) < 20 or len(t) < 20:  # one class absent: the prior alone decides
         return np.broadcast_to(row_prior[:, None], (H, W)).astype(np.float32)
     # the two fits are independent: one thread each (a 1024-wide CH1 photo's pair 0.36 s -> 0.24 s, the same fits
     # to the bit); BLAS held to one thread for both from here, so neither fit's exit lets it widen again
-    with threadpool_limits(1, user_api="blas"):
+    with one_thread("blas"):
         gmm_sky, gmm_terrain = concurrently(lambda: _fit_gmm(s, components, seed),
                                             lambda: _fit_gmm(t, components, seed + 1))
+    x = mixture_inputs(features, row_weight, dtype=np.float32)
     ll_sky = mixture_log_density(gmm_sky, x)
     ll_ter = mixture_log_density(gmm_terrain, x)
     prior = np.clip(np.repeat(row_prior, W), 1e-3, 1 - 1e-3)

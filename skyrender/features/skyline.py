@@ -262,14 +262,12 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
                 return hybrid
             gmm = _extract(image, features, edges, "gmm", params)
             return select_skylines(hybrid, gmm, params.select_tol_px)
-        from threadpoolctl import threadpool_limits
-
-        from ..blocks import concurrently
+        from ..blocks import concurrently, one_thread
 
         # the two extractors on a thread each (1.43 -> 1.19 s a CH1 photo on 2 cores, the same skylines to the bit);
         # BLAS and OpenMP held to one thread around both, so that neither's own limits, set and restored inside,
         # can widen them under the other
-        with threadpool_limits(1):
+        with one_thread():
             hybrid, gmm = concurrently(lambda: _extract(image, features, edges, "hybrid", params),
                                        lambda: _extract(image, features, edges, "gmm", params))
         return select_skylines(hybrid, gmm, params.select_tol_px)
