@@ -48,6 +48,8 @@ def main(argv=None) -> int:
           f"confidences: {sum(same_confidence)} of {len(same_confidence)}")
     for name, pick in (("all", np.ones(len(a["keys"]), bool)), ("1,024 wide", a["widths"] == 1024),
                        ("validation", np.array([k.startswith("validation:") for k in a["keys"]]))):
+        if not pick.any():
+            continue
         tb, ta = t_before[pick], t_after[pick]
         print(f"{name} ({pick.sum()} photos): seconds median {np.median(tb):.3f} -> {np.median(ta):.3f}, "
               f"ratio median {np.median(ta / tb):.2f}")
