@@ -728,6 +728,26 @@ def test_select_takes_the_mixtures_where_the_network_follows_a_cable(seed, built
     np.testing.assert_array_equal(runs["select"].confidence, runs["gmm"].confidence)
 
 
+def test_the_network_run_beside_the_features_gives_the_hybrid_it_would_compute_itself(builtin_view):
+    """``extract_skyline`` runs the sky network on a thread beside the pixel features and colour edges and
+    hands its probability to the hybrid: the skyline and confidence are those of the hybrid computing the
+    network itself after them, to the bit."""
+    from skyrender.features import SkylineParams
+    from skyrender.features import skyline as extraction
+
+    terrain, pose, K = builtin_view
+    image = render_photo(terrain, pose, K, Look(sky="clear", power_lines=1, seed=4)).image
+    params = SkylineParams(method="hybrid")
+    beside = extract_skyline(image, params)
+    cleaned, _ = extraction.remove_cables(image, params.cables)
+    features, edges = extraction._features_and_edges(cleaned, params)
+    itself = extraction._extract(cleaned, features, edges, "hybrid", params)
+    np.testing.assert_array_equal(beside.skyline, itself.skyline)
+    np.testing.assert_array_equal(beside.confidence, itself.confidence)
+    with pytest.raises(ValueError, match="unknown skyline method"):
+        extract_skyline(image, SkylineParams(method="otsu"))
+
+
 def test_select_runs_the_mixtures_only_where_the_hybrid_doubts(builtin_view, monkeypatch):
     """With ``select_gmm_above`` set, ``select`` runs gmm only where more than that share of the hybrid's
     columns have confidence below 0.5. On a clear render the hybrid is sure of every column: the answer is
@@ -742,9 +762,9 @@ def test_select_runs_the_mixtures_only_where_the_hybrid_doubts(builtin_view, mon
     ran = []
     original = extraction._extract
 
-    def counting(image, features, edges, method, params):
+    def counting(image, features, edges, method, params, p_net=None):
         ran.append(method)
-        return original(image, features, edges, method, params)
+        return original(image, features, edges, method, params, p_net)
 
     monkeypatch.setattr(extraction, "_extract", counting)
     hybrid = extract_skyline(image, SkylineParams(method="hybrid"))

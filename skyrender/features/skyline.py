@@ -250,36 +250,48 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
     H, W = image.shape[:2]
     if W > params.work_width:
         return _extract_reduced(image, params)
+    if params.method not in ("select", "gmm", "net", "hybrid"):
+        raise ValueError(f"unknown skyline method {params.method!r} (select, hybrid, net or gmm)")
+    from ..blocks import concurrently, one_thread
+
     if params.cables is not None:
         image, _ = remove_cables(image, params.cables)
-    features = pixel_features(image)
-    edges = _edge_strength(features, params.edge_percentile)
+    if params.method == "gmm":
+        p_net = None
+        features, edges = _features_and_edges(image, params)
+    else:  # the network needs only the image: it runs beside the features and edges, on the core they leave idle
+        (features, edges), p_net = concurrently(
+            lambda: _features_and_edges(image, params),
+            lambda: net_probability(image, params.net_weights, net_width=params.net_width))
     if params.method == "select":
         if params.select_gmm_above > 0:
             # the hybrid first, on both cores; gmm only where the hybrid doubts more than a few columns
-            hybrid = _extract(image, features, edges, "hybrid", params)
+            hybrid = _extract(image, features, edges, "hybrid", params, p_net)
             if not hybrid_in_doubt(hybrid, params.select_gmm_above):
                 return hybrid
             gmm = _extract(image, features, edges, "gmm", params)
             return select_skylines(hybrid, gmm, params.select_tol_px)
-        from ..blocks import concurrently, one_thread
-
         # the two extractors on a thread each (1.43 -> 1.19 s a CH1 photo on 2 cores, the same skylines to the bit);
         # BLAS and OpenMP held to one thread around both, so that neither's own limits, set and restored inside,
         # can widen them under the other
         with one_thread():
-            hybrid, gmm = concurrently(lambda: _extract(image, features, edges, "hybrid", params),
+            hybrid, gmm = concurrently(lambda: _extract(image, features, edges, "hybrid", params, p_net),
                                        lambda: _extract(image, features, edges, "gmm", params))
         return select_skylines(hybrid, gmm, params.select_tol_px)
-    if params.method not in ("gmm", "net", "hybrid"):
-        raise ValueError(f"unknown skyline method {params.method!r} (select, hybrid, net or gmm)")
-    return _extract(image, features, edges, params.method, params)
+    return _extract(image, features, edges, params.method, params, p_net)
+
+
+def _features_and_edges(image: np.ndarray, params: SkylineParams) -> tuple[np.ndarray, np.ndarray]:
+    """The photo's :func:`~.sky.pixel_features` (H, W, 5) and :func:`_edge_strength` (H+1, W)."""
+    features = pixel_features(image)
+    return features, _edge_strength(features, params.edge_percentile)
 
 
 def _extract(image: np.ndarray, features: np.ndarray, edges: np.ndarray, method: str,
-             params: SkylineParams) -> ExtractedSkyline:
+             params: SkylineParams, p_net: np.ndarray | None = None) -> ExtractedSkyline:
     """One extractor (``method``: gmm, net or hybrid) on a photo whose cables are painted over,
-    its :func:`~.sky.pixel_features` and :func:`_edge_strength` given."""
+    its :func:`~.sky.pixel_features` and :func:`_edge_strength` given, and for net and hybrid the
+    network's :func:`net_probability` when already computed."""
     H = image.shape[0]
     if method == "gmm":
         texture = _texture_cost(features, params.texture_weight)
@@ -287,7 +299,9 @@ def _extract(image: np.ndarray, features: np.ndarray, edges: np.ndarray, method:
         rows = _boundary(p, _edges_where_p_changes(edges, p, params.edge_contrast), params.edge_bonus,
                          params.jump_cost, params.jump_cap, texture)
     else:
-        p = p_net = net_probability(image, params.net_weights, net_width=params.net_width)
+        if p_net is None:
+            p_net = net_probability(image, params.net_weights, net_width=params.net_width)
+        p = p_net
         rows = _boundary(p_net, edges, *_net_boundary_weights(params))
         if method == "hybrid":
             texture = _texture_cost(features, params.texture_weight)

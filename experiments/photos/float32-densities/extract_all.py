@@ -34,12 +34,12 @@ def main(argv=None) -> int:
             if args.only_ch1 and not item.key.startswith("ch1/"):
                 continue
             image = load_photo(item.image_path)
-            times = []
-            for repeat in range(args.repeats):
+            times, results = [], []
+            for _ in range(args.repeats):
                 t = time.perf_counter()
-                extracted = extract_skyline(image, params)
+                results.append(extract_skyline(image, params))
                 times.append(time.perf_counter() - t)
-                result = extracted if repeat == 0 else result
+            result = results[0]
             seconds.append(min(times))
             keys.append(f"{side}:{item.key}")
             widths.append(image.shape[1])
