@@ -369,38 +369,37 @@ def test_a_core_a_sibling_is_done_with_goes_to_the_nested_work_of_the_one_still_
     (the photo extractor's longer line spreads over both cores when the shorter is done), with the values
     of running them in turn; while both work, the nested work stays in its own thread."""
     import threading
+    import time
 
+    from skyrender import blocks
     from skyrender.blocks import concurrently, in_blocks
 
     monkeypatch.setattr("os.cpu_count", lambda: 2)
-    short_done = threading.Event()
-    both = threading.Barrier(2, timeout=10)
+    start, end = threading.Barrier(2, timeout=10), threading.Barrier(2, timeout=10)
 
     def short():
-        both.wait()
+        start.wait()
+        end.wait()  # working until the long one's first nested calls are done
         return "short"
 
     def long():
-        both.wait()
+        start.wait()
         while_both = concurrently(lambda: threading.get_ident(), lambda: threading.get_ident())
-        short_done.wait(timeout=10)
+        end.wait()
+        deadline = time.monotonic() + 10
+        while blocks._working > 1 and time.monotonic() < deadline:  # until the short worker has counted itself done
+            time.sleep(0.001)
         pair = threading.Barrier(2, timeout=10)  # passes only with two blocks running at once
-        blocks = {}
-        in_blocks(4, 2, lambda lo, hi: (pair.wait(), blocks.__setitem__(lo, threading.get_ident())))
+        seen = {}
+        in_blocks(4, 2, lambda lo, hi: (pair.wait(), seen.__setitem__(lo, threading.get_ident())))
         calls = concurrently(lambda: (pair.wait(), threading.get_ident())[1], lambda: (pair.wait(), threading.get_ident())[1])
-        return threading.get_ident(), while_both, blocks, calls
+        return threading.get_ident(), while_both, seen, calls
 
-    def short_then_signal():
-        try:
-            return short()
-        finally:
-            threading.Timer(0.05, short_done.set).start()  # after this worker has counted itself done
-
-    results = concurrently(short_then_signal, long)
-    ident, while_both, blocks, calls = results[1]
+    results = concurrently(short, long)
+    ident, while_both, seen, calls = results[1]
     assert results[0] == "short"
     assert while_both == [ident, ident]  # both working: nested calls ran in the worker's own thread
-    assert sorted(blocks) == [0, 2] and len(set(blocks.values())) == 2
+    assert sorted(seen) == [0, 2] and len(set(seen.values())) == 2
     assert len(set(calls)) == 2
 
 
@@ -741,7 +740,8 @@ def test_the_network_run_beside_the_features_gives_the_hybrid_it_would_compute_i
     beside = extract_skyline(image, params)
     cleaned, _ = extraction.remove_cables(image, params.cables)
     features, edges = extraction._features_and_edges(cleaned, params)
-    itself = extraction._extract(cleaned, features, edges, "hybrid", params)
+    p_net = extraction.net_probability(cleaned, params.net_weights, net_width=params.net_width)
+    itself = extraction._extract(cleaned, features, edges, "hybrid", params, p_net)
     np.testing.assert_array_equal(beside.skyline, itself.skyline)
     np.testing.assert_array_equal(beside.confidence, itself.confidence)
     with pytest.raises(ValueError, match="unknown skyline method"):

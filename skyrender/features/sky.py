@@ -287,8 +287,8 @@ def mixture_inputs(features: np.ndarray, row_weight: float = ROW_WEIGHT, *, pixe
     x = np.empty((n, C + 1 if row_weight else C), dtype)
     x[:, :C] = flat if pixels is None else flat[pixels]
     if row_weight:
-        image_row = np.repeat(np.arange(H), W) if pixels is None else pixels // W
-        x[:, C] = (image_row + 0.5) / H * row_weight
+        row_value = (np.arange(H) + 0.5) / H * row_weight  # (H,) float64, then one value per pixel
+        x[:, C] = np.repeat(row_value, W) if pixels is None else row_value[pixels // W]
     return x
 
 

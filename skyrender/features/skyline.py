@@ -291,7 +291,7 @@ def _extract(image: np.ndarray, features: np.ndarray, edges: np.ndarray, method:
              params: SkylineParams, p_net: np.ndarray | None = None) -> ExtractedSkyline:
     """One extractor (``method``: gmm, net or hybrid) on a photo whose cables are painted over,
     its :func:`~.sky.pixel_features` and :func:`_edge_strength` given, and for net and hybrid the
-    network's :func:`net_probability` when already computed."""
+    network's :func:`net_probability` ``p_net`` (:func:`extract_skyline` runs it beside the features)."""
     H = image.shape[0]
     if method == "gmm":
         texture = _texture_cost(features, params.texture_weight)
@@ -299,8 +299,6 @@ def _extract(image: np.ndarray, features: np.ndarray, edges: np.ndarray, method:
         rows = _boundary(p, _edges_where_p_changes(edges, p, params.edge_contrast), params.edge_bonus,
                          params.jump_cost, params.jump_cap, texture)
     else:
-        if p_net is None:
-            p_net = net_probability(image, params.net_weights, net_width=params.net_width)
         p = p_net
         rows = _boundary(p_net, edges, *_net_boundary_weights(params))
         if method == "hybrid":
