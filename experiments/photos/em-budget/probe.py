@@ -23,8 +23,7 @@ import numpy as np
 from skyrender.benchmarks.skyline_photos import column_errors, meets_target
 from skyrender.datasets.real_photos import items_on_side
 from skyrender.evaluate import git_commit
-from skyrender.features import SkylineParams, extract_skyline, load_photo
-from skyrender.features import sky
+from skyrender.features import SkylineParams, extract_skyline, load_photo, sky
 
 SINGLE = {
     "shipped": {},
