@@ -31,6 +31,8 @@ def main(before_path: str, after_path: str) -> None:
     keys = sorted(set(before) & set(after))
     for mode in ("known", "unknown"):
         ks = [k for k in keys if k[1] == mode]
+        if not ks:  # a run of one fov mode only
+            continue
         same_bits = sum(before[k].get("refined_poses") == after[k].get("refined_poses")
                         and before[k]["status"] == after[k]["status"] for k in ks)
         moved = [abs(before[k]["error_m"] - after[k]["error_m"]) for k in ks
