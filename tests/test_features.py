@@ -175,7 +175,10 @@ def test_clear_sky_field_fits_a_smooth_sky_and_ignores_clouds():
 def _scikit_learn_mixture(samples: np.ndarray, seed: int):
     from sklearn.mixture import GaussianMixture
 
-    return GaussianMixture(5, covariance_type="full", reg_covar=0.5, max_iter=50, random_state=seed).fit(samples)
+    from skyrender.features.sky import GMM_MAX_ITER, GMM_REG_COVAR, GMM_TOL
+
+    return GaussianMixture(5, covariance_type="full", reg_covar=GMM_REG_COVAR, max_iter=GMM_MAX_ITER, tol=GMM_TOL,
+                           random_state=seed).fit(samples)
 
 
 @pytest.mark.parametrize("seed", [0, 1])

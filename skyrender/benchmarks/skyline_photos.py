@@ -218,7 +218,7 @@ def speed(items, method: str = "hybrid", repeats: int = 3) -> dict:
 
 def mixture_fit_speed(items, repeats: int = 3) -> dict:
     """Seconds of the colour mixtures' EM (:func:`~skyrender.features.sky._fit_gmm`) against
-    scikit-learn's ``GaussianMixture`` with the same settings, on the same samples (12,000 pixels
+    scikit-learn's ``GaussianMixture`` with the same settings, on the same samples (``MIXTURE_SAMPLES`` pixels
     of the top third and of the bottom half of a CH1 photo, as the mixtures' first round picks
     them), median of ``repeats`` after a warm-up, one thread each; and the largest difference
     between their fitted means."""
@@ -226,7 +226,7 @@ def mixture_fit_speed(items, repeats: int = 3) -> dict:
     from threadpoolctl import threadpool_limits
 
     from ..features import load_photo
-    from ..features.sky import GMM_MAX_ITER, GMM_REG_COVAR, _fit_gmm, mixture_inputs, pixel_features
+    from ..features.sky import GMM_MAX_ITER, GMM_REG_COVAR, GMM_TOL, MIXTURE_SAMPLES, _fit_gmm, mixture_inputs, pixel_features
 
     it = next(i for i in items if i.key.startswith("ch1/"))
     features = pixel_features(load_photo(it.image_path))
@@ -234,7 +234,8 @@ def mixture_fit_speed(items, repeats: int = 3) -> dict:
     x = mixture_inputs(features)
     rng = np.random.default_rng(0)
     top, bottom = x[: H // 3 * W], x[H // 2 * W:]
-    sets = [top[rng.choice(len(top), 12_000, replace=False)], bottom[rng.choice(len(bottom), 12_000, replace=False)]]
+    sets = [top[rng.choice(len(top), MIXTURE_SAMPLES, replace=False)],
+            bottom[rng.choice(len(bottom), MIXTURE_SAMPLES, replace=False)]]
 
     def ours(samples):
         return _fit_gmm(samples, 5, 0).means
@@ -242,9 +243,9 @@ def mixture_fit_speed(items, repeats: int = 3) -> dict:
     def theirs(samples):
         with threadpool_limits(1):
             return GaussianMixture(5, covariance_type="full", reg_covar=GMM_REG_COVAR, max_iter=GMM_MAX_ITER,
-                                   random_state=0).fit(samples).means_
+                                   tol=GMM_TOL, random_state=0).fit(samples).means_
 
-    out = {"photo": it.key, "samples": 12_000}
+    out = {"photo": it.key, "samples": MIXTURE_SAMPLES}
     for name, fit in (("ours", ours), ("scikit_learn", theirs)):
         means = [fit(s) for s in sets]
         times = []
