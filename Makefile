@@ -56,15 +56,19 @@ bench-scale: install
 bench-split: install
 	$(BIN)/python -m skyrender.benchmarks.split_search --workers 2
 
-# refit the photo confidence of the localizer on the 73 CH1 photos of the training side (~40 min)
+# refit the photo confidence of the localizer from the committed rows of the 73 CH1 training-side photos (seconds;
+# reproduces skyrender/localizer/photo_confidence.json); `make fit-photo-confidence FIT_FROM=` localizes them again
+# first (~40 min) into experiments/ch1/confidence-train-rows.json (at b3845fc that fit differs:
+# experiments/photos/em-budget/shipped/README.md)
 # the fov-unknown threshold comes from the training rows localized that way (regenerate them with the localizer:
 # python -m skyrender.benchmarks.real_localize --side train --fov unknown --limit 20 --no-abstain --tag unknown-train
 #   --out experiments/ch1/dem-window/unknown, and --side dev (all 21) --tag unknown-dev); the second opinion is fitted on
 # what its search gives each photo: those rows, and for the 5 dev photos narrower than the fov-unknown search reaches,
 # python -m skyrender.benchmarks.real_localize --side dev --fov second --no-abstain --photos <them> --tag second-telephoto
 #   --out experiments/ch1/telephoto-second-opinion
+FIT_FROM ?= --from-rows
 fit-photo-confidence: install
-	$(BIN)/python -m skyrender.training.localize_fit --fov-unknown-rows experiments/ch1/rerank-cut-fov-unknown/bench-real-train-cut300.json \
+	$(BIN)/python -m skyrender.training.localize_fit $(FIT_FROM) --fov-unknown-rows experiments/ch1/rerank-cut-fov-unknown/bench-real-train-cut300.json \
 		experiments/ch1/rerank-cut-fov-unknown/bench-real-dev-cut300.json experiments/ch1/mode-agreement/bench-real-train-rest32.json \
 		--second-opinion-rows experiments/ch1/rerank-cut-fov-unknown/bench-real-train-cut300.json \
 		experiments/ch1/rerank-cut-fov-unknown/bench-real-dev-cut300.json experiments/ch1/mode-agreement/bench-real-train-rest32.json \

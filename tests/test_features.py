@@ -712,17 +712,40 @@ def test_select_keeps_the_skyline_more_confident_where_the_two_part():
     assert select_skylines(ExtractedSkyline(first.skyline, np.where(np.arange(W) == 7, 0.2, 1.0), p), lone) is lone
 
 
+def _select_budget() -> dict:
+    """The ``SkylineParams`` fields that give another method ``select``'s EM budget."""
+    from skyrender.features.skyline import SELECT_MIXTURE_BUDGET
+
+    return dict(zip(("mixture_tol", "mixture_samples"), SELECT_MIXTURE_BUDGET))
+
+
+def test_the_mixtures_em_budget_is_the_methods_unless_set():
+    """``select`` (the photo extractor) fits its colour mixtures on a smaller EM budget than the other methods,
+    whose budget the render preset and the hand-set gmm checks stand on; either field set wins for any method."""
+    from skyrender.features import SkylineParams
+    from skyrender.features.sky import GMM_TOL, MIXTURE_SAMPLES
+
+    assert SkylineParams(method="select").mixture_budget() == (1e-2, 6_000)
+    for method in ("gmm", "hybrid"):
+        assert SkylineParams(method=method).mixture_budget() == (GMM_TOL, MIXTURE_SAMPLES) == (1e-3, 12_000)
+    assert SkylineParams(method="gmm", **_select_budget()).mixture_budget() == (1e-2, 6_000)
+    assert SkylineParams(method="select", mixture_samples=9_000).mixture_budget() == (1e-2, 9_000)
+    assert SkylineParams(method="gmm", mixture_tol=1e-4).mixture_budget() == (1e-4, 12_000)
+
+
 @pytest.mark.parametrize("seed", [14, 15])
 def test_select_takes_the_mixtures_where_the_network_follows_a_cable(seed, builtin_view):
     """With the cables left in (``cables=None``), the network-led hybrid takes the lower cable for
     the skyline (61-70 px off on these two) at middling confidence, where the per-photo mixtures hold
-    at a confident 0.14 px: ``select`` keeps the mixtures' skyline — the very arrays of ``gmm`` run alone,
-    though ``select`` runs its two extractors on a thread each."""
+    at a confident 0.14 px: ``select`` keeps the mixtures' skyline — the very arrays of ``gmm`` run alone on
+    select's EM budget, though ``select`` runs its two extractors on a thread each."""
     from skyrender.features import SkylineParams
 
     terrain, pose, K = builtin_view
     photo = render_photo(terrain, pose, K, Look(sky="clear", power_lines=2, seed=seed))
-    runs = {m: extract_skyline(photo.image, SkylineParams(method=m, cables=None)) for m in ("hybrid", "gmm", "select")}
+    budget = _select_budget()
+    runs = {m: extract_skyline(photo.image, SkylineParams(method=m, cables=None, **budget))
+            for m in ("hybrid", "gmm", "select")}
     assert np.median(column_errors(runs["hybrid"].skyline, photo.sky_boundary)) > 20
     e = column_errors(runs["select"].skyline, photo.sky_boundary)
     assert np.median(e) <= 0.5 and np.mean(e <= 5) >= 0.95
@@ -754,9 +777,9 @@ def test_the_network_run_beside_the_features_gives_the_hybrid_it_would_compute_i
 def test_select_runs_the_mixtures_only_where_the_hybrid_doubts(builtin_view, monkeypatch):
     """With ``select_gmm_above`` set, ``select`` runs gmm only where more than that share of the hybrid's
     columns have confidence below 0.5. On a clear render the hybrid is sure of every column: the answer is
-    its own skyline and confidence, to the bit, and gmm never runs; at 0 (the default: gmm always) both
-    run and, within 5 px everywhere, the hybrid's skyline is kept all the same. With two cables left in,
-    the hybrid doubts the columns where it follows one, so gmm runs."""
+    its own skyline and confidence (the hybrid's on select's EM budget), to the bit, and gmm never runs; at 0
+    (the default: gmm always) both run and, within 5 px everywhere, the hybrid's skyline is kept all the same.
+    With two cables left in, the hybrid doubts the columns where it follows one, so gmm runs."""
     from skyrender.features import SkylineParams
     from skyrender.features import skyline as extraction
 
@@ -770,7 +793,7 @@ def test_select_runs_the_mixtures_only_where_the_hybrid_doubts(builtin_view, mon
         return original(image, features, edges, method, params, p_net)
 
     monkeypatch.setattr(extraction, "_extract", counting)
-    hybrid = extract_skyline(image, SkylineParams(method="hybrid"))
+    hybrid = extract_skyline(image, SkylineParams(method="hybrid", **_select_budget()))
     assert np.mean(hybrid.confidence < 0.5) <= 0.02
     ran.clear()
     gated = extract_skyline(image, SkylineParams(method="select", select_gmm_above=0.02))

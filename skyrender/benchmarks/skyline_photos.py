@@ -218,7 +218,8 @@ def speed(items, method: str = "hybrid", repeats: int = 3) -> dict:
 
 def mixture_fit_speed(items, repeats: int = 3) -> dict:
     """Seconds of the colour mixtures' EM (:func:`~skyrender.features.sky._fit_gmm`) against
-    scikit-learn's ``GaussianMixture`` with the same settings, on the same samples (``MIXTURE_SAMPLES`` pixels
+    scikit-learn's ``GaussianMixture`` with the same settings (the photo extractor's budget,
+    :data:`~skyrender.features.skyline.SELECT_MIXTURE_BUDGET`), on the same samples (that many pixels
     of the top third and of the bottom half of a CH1 photo, as the mixtures' first round picks
     them), median of ``repeats`` after a warm-up, one thread each; and the largest difference
     between their fitted means."""
@@ -226,26 +227,27 @@ def mixture_fit_speed(items, repeats: int = 3) -> dict:
     from threadpoolctl import threadpool_limits
 
     from ..features import load_photo
-    from ..features.sky import GMM_MAX_ITER, GMM_REG_COVAR, GMM_TOL, MIXTURE_SAMPLES, _fit_gmm, mixture_inputs, pixel_features
+    from ..features.sky import GMM_MAX_ITER, GMM_REG_COVAR, _fit_gmm, mixture_inputs, pixel_features
+    from ..features.skyline import SELECT_MIXTURE_BUDGET
 
+    tol, n_samples = SELECT_MIXTURE_BUDGET
     it = next(i for i in items if i.key.startswith("ch1/"))
     features = pixel_features(load_photo(it.image_path))
     H, W = features.shape[:2]
     x = mixture_inputs(features)
     rng = np.random.default_rng(0)
     top, bottom = x[: H // 3 * W], x[H // 2 * W:]
-    sets = [top[rng.choice(len(top), MIXTURE_SAMPLES, replace=False)],
-            bottom[rng.choice(len(bottom), MIXTURE_SAMPLES, replace=False)]]
+    sets = [top[rng.choice(len(top), n_samples, replace=False)], bottom[rng.choice(len(bottom), n_samples, replace=False)]]
 
     def ours(samples):
-        return _fit_gmm(samples, 5, 0).means
+        return _fit_gmm(samples, 5, 0, tol).means
 
     def theirs(samples):
         with threadpool_limits(1):
             return GaussianMixture(5, covariance_type="full", reg_covar=GMM_REG_COVAR, max_iter=GMM_MAX_ITER,
-                                   tol=GMM_TOL, random_state=0).fit(samples).means_
+                                   tol=tol, random_state=0).fit(samples).means_
 
-    out = {"photo": it.key, "samples": MIXTURE_SAMPLES}
+    out = {"photo": it.key, "samples": n_samples, "tol": tol}
     for name, fit in (("ours", ours), ("scikit_learn", theirs)):
         means = [fit(s) for s in sets]
         times = []
@@ -337,7 +339,8 @@ def report_text(report: dict) -> str:
                 f"{sp['1024']['seconds']:.2f} s; {sp['12mp']['width']} x {sp['12mp']['height']} (12.6 MP): "
                 f"{sp['12mp']['seconds']:.2f} s, median error {sp['12mp']['median_px_at_1024']:.2f} px at 1024 scale "
                 f"({sp['1024']['median_px_at_1024']:.2f} px on the 1024 original)")
-    text.append(f"colour mixture fit ({fits['photo']}, {fits['samples']} samples, median of 3): "
+    text.append(f"colour mixture fit ({fits['photo']}, {fits['samples']} samples, tolerance {fits.get('tol', 1e-3):g}, "
+                "median of 3): "
                 f"{fits['ours']['seconds']:.3f} s against scikit-learn's GaussianMixture "
                 f"{fits['scikit_learn']['seconds']:.3f} s ({fits['scikit_learn']['seconds'] / fits['ours']['seconds']:.1f}x), "
                 f"means apart by at most {fits['max_mean_difference']:.1e}")

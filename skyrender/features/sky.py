@@ -60,16 +60,15 @@ class Mixture:
 #: tolerance on the mean log-likelihood's change (scikit-learn's reg_covar, max_iter and tol).
 GMM_REG_COVAR = 0.5
 GMM_MAX_ITER = 50  # plenty for a probability map
-# 1e-2, not scikit-learn's 1e-3, and 6,000 samples a class, not 12,000: 0.78x the extractor's
-# seconds, the same training-side skylines and localizations (experiments/photos/em-budget/)
-GMM_TOL = 1e-2
-MIXTURE_SAMPLES = 6_000
+GMM_TOL = 1e-3
+#: pixels a class the full-resolution fits sample (the EM's other budget)
+MIXTURE_SAMPLES = 12_000
 
 
-def _fit_gmm(samples: np.ndarray, components: int, seed: int) -> Mixture:
+def _fit_gmm(samples: np.ndarray, components: int, seed: int, tol: float = GMM_TOL) -> Mixture:
     """Full-covariance Gaussian mixture of ``samples`` (N, D), deterministic for a seed: what
     scikit-learn's ``GaussianMixture(covariance_type="full", reg_covar=GMM_REG_COVAR,
-    max_iter=GMM_MAX_ITER, tol=GMM_TOL, random_state=seed)`` fits (its k-means start, then the same EM
+    max_iter=GMM_MAX_ITER, tol=tol, random_state=seed)`` fits (its k-means start, then the same EM
     steps and stop, to ~1e-10), with each EM step over all components in a few matrix
     products instead of several passes per component. The k-means start is scikit-learn's too
     (:mod:`.kmeans`), without importing it.
@@ -97,7 +96,7 @@ def _fit_gmm(samples: np.ndarray, components: int, seed: int) -> Mixture:
             log_prob -= norm  # log responsibilities
             nk, means, chol = _mixture_m_step(x, outer, np.exp(log_prob, out=log_prob), GMM_REG_COVAR)
             previous, lower = lower, float(np.mean(norm))
-            mixture = Mixture(nk / nk.sum(), means, chol, step, abs(lower - previous) < GMM_TOL)
+            mixture = Mixture(nk / nk.sum(), means, chol, step, abs(lower - previous) < tol)
             if mixture.converged:
                 break
     return replace(mixture, means=mixture.means + centre)
@@ -297,10 +296,11 @@ def mixture_inputs(features: np.ndarray, row_weight: float = ROW_WEIGHT, *, pixe
 
 def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np.ndarray,
                     row_prior: np.ndarray, *, components: int = 5, max_samples: int = MIXTURE_SAMPLES,
-                    row_weight: float = ROW_WEIGHT, seed: int = 0) -> np.ndarray:
+                    tol: float = GMM_TOL, row_weight: float = ROW_WEIGHT, seed: int = 0) -> np.ndarray:
     """(H, W) P(sky) from colour-texture mixtures fitted to the given sky / terrain pixels.
 
-    ``row_prior`` (H,) is the prior P(sky) per row. Deterministic for a seed.
+    ``row_prior`` (H,) is the prior P(sky) per row; the mixtures are fitted on at most ``max_samples``
+    pixels a class, their EM stopped at ``tol`` (:func:`_fit_gmm`). Deterministic for a seed.
     """
     from ..blocks import concurrently, one_thread
 
@@ -319,8 +319,8 @@ def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np
     # the two fits are independent: one thread each (a 1024-wide CH1 photo's pair 0.36 s -> 0.24 s, the same fits
     # to the bit); BLAS held to one thread for both from here, so neither fit's exit lets it widen again
     with one_thread("blas"):
-        gmm_sky, gmm_terrain = concurrently(lambda: _fit_gmm(s, components, seed),
-                                            lambda: _fit_gmm(t, components, seed + 1))
+        gmm_sky, gmm_terrain = concurrently(lambda: _fit_gmm(s, components, seed, tol),
+                                            lambda: _fit_gmm(t, components, seed + 1, tol))
     x = mixture_inputs(features, row_weight, dtype=np.float32)
     ll_sky = mixture_log_density(gmm_sky, x)
     ll_ter = mixture_log_density(gmm_terrain, x)

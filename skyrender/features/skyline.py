@@ -39,7 +39,7 @@ from functools import lru_cache
 import numpy as np
 
 from .cables import CableParams, remove_cables
-from .sky import pixel_features, sky_probability
+from .sky import GMM_TOL, MIXTURE_SAMPLES, pixel_features, sky_probability
 from .sky_net import NET_WIDTH, sky_logits
 
 FITTED = os.path.join(os.path.dirname(__file__), "weights", "sky_net_fit.json")  # by skyrender.training.skyline_fit
@@ -109,6 +109,26 @@ class SkylineParams:
     # 95.4 / 94.7 against 95.2 / 94.4 %); but on renders it loses foreground occluders (99.7 -> 80 % within 5 px), and as
     # the default it would move every gmm line and the localizer's figures (experiments/photos/quick-checks-2026-12-05/)
     edge_contrast: float = 0.0
+    # the colour mixtures' EM budget (None: the method's, :meth:`mixture_budget`): the EM stops when the mean
+    # log-likelihood changes by less than ``mixture_tol``, and the full-resolution fits sample ``mixture_samples``
+    # pixels a class (gmm's drafts keep ``draft_samples``)
+    mixture_tol: float | None = None
+    mixture_samples: int | None = None
+
+    def mixture_budget(self) -> tuple[float, int]:
+        """(tol, samples) of the colour mixtures' EM: ``mixture_tol`` and ``mixture_samples``, where None the
+        method's. "select", the photo extractor, stops at 1e-2 on 6,000 pixels: 0.78x its seconds, the same
+        training-side skylines and localizations, chosen there (``experiments/photos/em-budget/``). The others keep
+        scikit-learn's 1e-3 and 12,000, which the render preset and gmm's hand-set checks stand on: with 1e-2 a
+        rendered view with a fifth of its columns occluded lost its answer, and the weisshorn photo's hazy ridge 2
+        of its 16 columns."""
+        tol, samples = SELECT_MIXTURE_BUDGET if self.method == "select" else (GMM_TOL, MIXTURE_SAMPLES)
+        return (tol if self.mixture_tol is None else self.mixture_tol,
+                samples if self.mixture_samples is None else self.mixture_samples)
+
+
+#: (tol, samples) of the colour mixtures' EM for ``method="select"`` (:meth:`SkylineParams.mixture_budget`)
+SELECT_MIXTURE_BUDGET = (1e-2, 6_000)
 
 
 @dataclass(frozen=True)
@@ -362,7 +382,9 @@ def _hybrid_probability(features: np.ndarray, p_net: np.ndarray, rows: np.ndarra
     v = np.arange(H)[:, None]
     sky = (v < rows[None, :] - params.band) & (p_net > 0.5)
     terrain = (v >= rows[None, :] + params.band) & (p_net < 0.5)
-    p_colour = sky_probability(features, sky, terrain, _row_prior(H), components=params.components, seed=0)
+    tol, samples = params.mixture_budget()
+    p_colour = sky_probability(features, sky, terrain, _row_prior(H), components=params.components,
+                               max_samples=samples, tol=tol, seed=0)
     logit = HYBRID_NET_WEIGHT * _logit(p_net) + _logit(p_colour)
     return (1.0 / (1.0 + np.exp(-logit))).astype(np.float32)
 
@@ -405,10 +427,11 @@ def _gmm_probability(features: np.ndarray, edges: np.ndarray, texture: np.ndarra
     sky_mask, terrain_mask = initial_seeds(features)
     s = max(1, int(params.draft_scale)) if W >= params.draft_min_width else 1
     draft = features[::s, ::s]
+    tol, samples = params.mixture_budget()
     for round_ in range(params.rounds - 1):
         p = sky_probability(draft, sky_mask[::s, ::s], terrain_mask[::s, ::s], _row_prior(draft.shape[0]),
-                            components=params.components, seed=round_,
-                            **({"max_samples": params.draft_samples} if s > 1 else {}))
+                            components=params.components, seed=round_, tol=tol,
+                            max_samples=params.draft_samples if s > 1 else samples)
         draft_edges = _edge_strength(draft, params.edge_percentile) if s > 1 else edges
         rows = _boundary(p, _edges_where_p_changes(draft_edges, p, params.edge_contrast), params.edge_bonus,
                          params.jump_cost / s,
@@ -417,7 +440,7 @@ def _gmm_probability(features: np.ndarray, edges: np.ndarray, texture: np.ndarra
         sky_mask = v < rows[None, :] - params.band
         terrain_mask = v >= rows[None, :] + params.band
     return sky_probability(features, sky_mask, terrain_mask, _row_prior(H), components=params.components,
-                           seed=params.rounds - 1)
+                           max_samples=samples, tol=tol, seed=params.rounds - 1)
 
 
 def _texture_cost(features: np.ndarray, weight: float) -> np.ndarray | None:
