@@ -733,6 +733,34 @@ def test_the_mixtures_em_budget_is_the_methods_unless_set():
     assert SkylineParams(method="gmm", mixture_tol=1e-4).mixture_budget() == (1e-4, 12_000)
 
 
+def test_every_mixture_fit_of_an_extraction_gets_its_methods_budget(builtin_view, monkeypatch):
+    """The hybrid's fit and each of gmm's rounds are given the method's EM budget: the full-resolution fits its
+    sample count, gmm's drafts (every other row and column of a photo 640 px wide or wider) ``draft_samples``."""
+    from skyrender.features import SkylineParams
+    from skyrender.features import skyline as extraction
+
+    terrain, pose, K = builtin_view
+    image = render_photo(terrain, pose, K, Look(sky="clear", seed=3)).image
+    assert image.shape[1] >= SkylineParams().draft_min_width
+    fits = []
+    original = extraction.sky_probability
+
+    def recording(features, *args, **kwargs):
+        fits.append((features.shape[1], kwargs["tol"], kwargs["max_samples"]))
+        return original(features, *args, **kwargs)
+
+    monkeypatch.setattr(extraction, "sky_probability", recording)
+    W = image.shape[1]
+    for method, (tol, samples) in (("gmm", (1e-3, 12_000)), ("hybrid", (1e-3, 12_000)), ("select", (1e-2, 6_000))):
+        params = SkylineParams(method=method)
+        fits.clear()
+        extract_skyline(image, params)
+        drafts = [(-(-W // 2), tol, params.draft_samples)] * (params.rounds - 1)
+        expected = {"gmm": drafts + [(W, tol, samples)], "hybrid": [(W, tol, samples)],
+                    "select": drafts + [(W, tol, samples)] * 2}[method]
+        assert sorted(fits) == sorted(expected), method
+
+
 @pytest.mark.parametrize("seed", [14, 15])
 def test_select_takes_the_mixtures_where_the_network_follows_a_cable(seed, builtin_view):
     """With the cables left in (``cables=None``), the network-led hybrid takes the lower cable for
