@@ -50,8 +50,6 @@ def view_terrain_flat(view_dem):
 def valley_view(view_dem):
     """A camera on the lowest point of the DEM's central third looking at the ridges, and
     320x240 intrinsics."""
-    from skyrender.camera import Intrinsics
-
     dem = view_dem
     z = dem.elevation
     rows, cols = z.shape
