@@ -1,8 +1,11 @@
-"""``select`` with the boundary search's blue support (``SkylineParams.blue_support``) on the training side (dev and train; never validation): each photo extracted by every
-variant in turn (the order rotating from photo to photo, so that the machine's drift falls on all alike), the
-target (median <= 2 px and >= 95 % within 5 px), the mean share within 5 px, the lowest photo and the median seconds.
+"""``select`` as shipped and with SkylineParams fields set, on the training side (dev and train; never validation):
+each photo extracted by every variant in turn (the order rotating from photo to photo, so that the machine's drift
+falls on all alike), the target (median <= 2 px and >= 95 % within 5 px), the mean share within 5 px, the lowest photo
+and the median seconds.
 
-``python experiments/photos/blue-support/probe.py [--sides dev train] [--out OUT.json]``
+``python experiments/photos/variants_probe.py --variant NAME '{"field": value, ...}' [--variant ...] [--sides dev train]
+[--out OUT.json]``, e.g. (``speed-2026-12-07/``) ``--variant "rounds 2" '{"rounds": 2}' --variant "components 4"
+'{"components": 4}' --variant "rounds 2, components 4" '{"rounds": 2, "components": 4}'``
 """
 import argparse
 import json
@@ -16,17 +19,13 @@ from skyrender.datasets.real_photos import items_on_side
 from skyrender.features import SkylineParams, extract_skyline, load_photo
 
 SHIPPED = SkylineParams(method="select")
-VARIANTS = {  # the boundary search's blue support (SkylineParams.blue_support)
-    "shipped": SHIPPED,
-    "blue 1": replace(SHIPPED, blue_support=1.0),
-    "blue 2": replace(SHIPPED, blue_support=2.0),
-    "blue 4": replace(SHIPPED, blue_support=4.0),
-}
-
 parser = argparse.ArgumentParser()
 parser.add_argument("--sides", nargs="+", default=["dev", "train"])
 parser.add_argument("--out", default=None)
+parser.add_argument("--variant", nargs=2, action="append", default=[], metavar=("NAME", "JSON"),
+                    help="a variant: its name and the SkylineParams fields it sets, as a JSON object")
 args = parser.parse_args()
+VARIANTS = {"shipped": SHIPPED, **{name: replace(SHIPPED, **json.loads(fields)) for name, fields in args.variant}}
 rows = []
 names = list(VARIANTS)
 for side in args.sides:
