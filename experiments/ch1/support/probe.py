@@ -15,7 +15,7 @@ import json
 
 import numpy as np
 
-from skyrender.benchmarks.real_localize import margin_of, places_of, refined_of
+from skyrender.benchmarks.real_localize import answer_xy, margin_of, places_of, refined_of
 from skyrender.training.localize_fit import abstain_threshold, fit_logistic, rows_right
 
 SUPPORT_POSES = 4
@@ -47,10 +47,8 @@ def conf(X, logit):
 
 
 def error_of(r):
-    P = refined_of(r)
-    if not len(P):
-        return np.inf
-    return float(np.hypot(*(P[int(np.argmin(P[:, 7])), :2] - np.array(r["truth_xy"]))))
+    """m from the truth to the row's answer, given or withheld (inf without one)."""
+    return float(np.nan_to_num(np.hypot(*(answer_xy(r) - np.array(r["truth_xy"]))), nan=np.inf))
 
 
 def summary(name, rows, c, th):
