@@ -1,7 +1,7 @@
 """Is the right place beaten by the score, or never reached? The localizer's refined
 candidates against refinements started at the TRUE position.
 
-``python -m skyrender.diagnostics.truth_refine [--side dev] [--limit N] [--photos KEY ...]``
+``python -m skyrender.diagnostics.truth_refine [--side dev] [--limit N] [--photos KEY ...] [--true-skyline]``
 
 For each CH1 photo of a side (the dev side by default; never the validation side for
 development), its focal length known, against the SRTM mosaic of its place (the photo
@@ -62,9 +62,12 @@ def orientation_at(terrain, x: float, y: float, height: float, k, sky: np.ndarra
     return aligned[picked]
 
 
-def probe_photo(it, dem, terrain, model, params, arrays_to: str | None = None) -> dict:
+def probe_photo(it, dem, terrain, model, params, arrays_to: str | None = None, true_skyline: bool = False) -> dict:
     """Rows 1-3 of the module doc for one photo item; with ``arrays_to`` (a folder) also its
-    skylines: the photo's, each refined pose's rendered (answer first), the truth's two last."""
+    skylines: the photo's, each refined pose's rendered (answer first), the truth's two last.
+    With ``true_skyline`` the photo's skyline is its true one (the mask), every column trusted:
+    what is lost by the score then is lost with a perfect extractor too."""
+    from ..benchmarks.real_localize import true_extraction
     from ..camera import Intrinsics
     from ..features import extract_skyline, load_photo
     from ..localizer import localize
@@ -75,7 +78,7 @@ def probe_photo(it, dem, terrain, model, params, arrays_to: str | None = None) -
     t = time.perf_counter()
     image = load_photo(it.image_path)
     H, W = image.shape[:2]
-    extracted = extract_skyline(image, params.skyline_params())
+    extracted = true_extraction(it, H) if true_skyline else extract_skyline(image, params.skyline_params())
     sky, weights = extracted.skyline, column_weights(extracted.confidence, params.confidence_power)
     k = Intrinsics(W, H, it.focal_px, W / 2, H / 2)
     tx, ty = (float(v) for v in dem.from_lonlat(it.lon, it.lat))
@@ -123,14 +126,15 @@ def verdict(row: dict) -> str:
     return "search" if row["answer_score"] is None or truth < row["answer_score"] else "score"
 
 
-def probe(items, params=None, progress: bool = True, arrays_to: str | None = None) -> list[dict]:
+def probe(items, params=None, progress: bool = True, arrays_to: str | None = None,
+          true_skyline: bool = False) -> list[dict]:
     from ..benchmarks.real_localize import with_place
     from ..localizer import LocalizeParams
 
     params = params or LocalizeParams.for_photos()
     rows = []
     for n, it, place in with_place(items):
-        row = probe_photo(it, *place, params, arrays_to)
+        row = probe_photo(it, *place, params, arrays_to, true_skyline)
         rows.append(row)
         if progress:
             answer = "none" if row["error_m"] is None else f"{row['error_m']:.0f} m at {row['answer_score']:.2f} px"
@@ -164,6 +168,8 @@ def main(argv=None) -> int:
     parser.add_argument("--tag", default="")
     parser.add_argument("--out", default=os.path.join(REPO, "experiments", "ch1"))
     parser.add_argument("--arrays", default=None, metavar="DIR", help="also write each photo's skylines there (.npz)")
+    parser.add_argument("--true-skyline", action="store_true",
+                        help="localize and fit from each photo's true skyline (its mask), not the extracted one")
     args = parser.parse_args(argv)
     if not os.path.isdir(DEFAULT_PHOTOS):
         print(f"no photos at {DEFAULT_PHOTOS}")
@@ -178,14 +184,15 @@ def main(argv=None) -> int:
         items = items[:: max(1, len(items) // args.limit)][: args.limit]
     if args.arrays:
         os.makedirs(args.arrays, exist_ok=True)
-    rows = probe(items, params, arrays_to=args.arrays)
+    rows = probe(items, params, arrays_to=args.arrays, true_skyline=args.true_skyline)
     s = summary(rows)
     print(f"{s['photos']} photos: {s['right']} answered within 1 km; of the others, lost by the score {s['score']}, "
           f"by the search {s['search']} ({s['wrong_with_a_near_candidate_refined']} with a candidate within 1 km refined)")
     os.makedirs(args.out, exist_ok=True)
     tag = args.side + (f"-{args.tag}" if args.tag else "")
     with open(os.path.join(args.out, f"truth-refine-{tag}.json"), "w") as f:
-        json.dump({"commit": git_commit(), "side": args.side, "set": args.set, "summary": s, "photos": rows}, f, indent=1)
+        json.dump({"commit": git_commit(), "side": args.side, "set": args.set, "true_skyline": args.true_skyline,
+                   "summary": s, "photos": rows}, f, indent=1)
     return 0
 
 
