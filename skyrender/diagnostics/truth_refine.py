@@ -118,12 +118,17 @@ def probe_photo(it, dem, terrain, model, params, arrays_to: str | None = None, t
     return row
 
 
+def truth_score(row: dict) -> float:
+    """The truth's best fit (px): pinned at it, or refined from it while it stays within 1 km."""
+    free = row["from_truth"]
+    return min(row["pinned"]["score"], free["score"] if free["moved_m"] <= WRONG_M else np.inf)
+
+
 def verdict(row: dict) -> str:
     """``right`` (answer within 1 km), else ``search`` or ``score`` (module doc)."""
     if row["error_m"] is not None and row["error_m"] <= WRONG_M:
         return "right"
-    truth = min(row["pinned"]["score"], row["from_truth"]["score"] if row["from_truth"]["moved_m"] <= WRONG_M else np.inf)
-    return "search" if row["answer_score"] is None or truth < row["answer_score"] else "score"
+    return "search" if row["answer_score"] is None or truth_score(row) < row["answer_score"] else "score"
 
 
 def probe(items, params=None, progress: bool = True, arrays_to: str | None = None,

@@ -16,12 +16,7 @@ import sys
 import numpy as np
 
 from skyrender.datasets.real_photos import split_places
-
-
-def truth_score(row: dict) -> float:
-    """The truth's best fit: pinned at it, or refined from it while it stays within 1 km."""
-    free = row["from_truth"]
-    return min(row["pinned"]["score"], free["score"] if free["moved_m"] <= 1000.0 else np.inf)
+from skyrender.diagnostics.truth_refine import truth_score
 
 
 def main(paths: list[str]) -> None:
