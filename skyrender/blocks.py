@@ -96,6 +96,30 @@ def concurrently(*calls: Callable[[], T]) -> list[T]:
     return [c() for c in calls]
 
 
+class Once:
+    """A value made by ``make()`` (no arguments) on its first request, by whichever thread asks first; a thread
+    asking while it is being made waits for it. For work two concurrent lines both need, the one that needs it first
+    paying for it (the photo extractor's colour edges and texture cost)."""
+
+    def __init__(self, make: Callable[[], T]):
+        self._make = make
+        self._lock = threading.Lock()
+        self._made = False
+        self._value = None
+
+    def __call__(self) -> T:
+        with self._lock:
+            if not self._made:
+                self._value, self._made = self._make(), True
+                self._make = None  # what it closed over is no longer needed
+        return self._value
+
+
+def made(value):
+    """``value()`` for a :class:`Once`, else ``value`` itself."""
+    return value() if isinstance(value, Once) else value
+
+
 _controller: tuple[int, object] | None = None  # (len(sys.modules) when made, threadpoolctl's ThreadpoolController)
 
 

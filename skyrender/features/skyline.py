@@ -38,6 +38,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..blocks import Once, concurrently, made, one_thread
 from .cables import CableParams, remove_cables
 from .sky import GMM_TOL, MIXTURE_SAMPLES, pixel_features, sky_probability
 from .sky_net import NET_WIDTH, sky_logits
@@ -272,33 +273,34 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
         return _extract_reduced(image, params)
     if params.method not in ("select", "gmm", "net", "hybrid"):
         raise ValueError(f"unknown skyline method {params.method!r} (select, hybrid, net or gmm)")
-    from ..blocks import concurrently, one_thread
-
     if params.cables is not None:
         image, _ = remove_cables(image, params.cables)
     if params.method == "gmm":
         p_net = None
-        features, edges = _features_and_edges(image, params)
-    else:  # the network needs only the image: it runs beside the features and edges, on the core they leave idle
-        (features, edges), p_net = concurrently(
-            lambda: _features_and_edges(image, params),
-            lambda: net_probability(image, params.net_weights, net_width=params.net_width))
+        features = pixel_features(image)
+    else:  # the network needs only the image: it runs beside the pixel features, on the core they leave idle
+        features, p_net = concurrently(lambda: pixel_features(image),
+                                       lambda: net_probability(image, params.net_weights, net_width=params.net_width))
+    # made on first request, by whichever line asks first: with select the hybrid's line makes the colour edges (it
+    # needs them at once, gmm's line only for its last boundary) and gmm's the texture cost, off gmm's longer line
+    edges = Once(lambda: _edge_strength(features, params.edge_percentile))
+    texture = Once(lambda: _texture_cost(features, params.texture_weight))
     if params.method == "select":
         if params.select_gmm_above > 0:
             # the hybrid first, on both cores; gmm only where the hybrid doubts more than a few columns
-            hybrid = _extract(image, features, edges, "hybrid", params, p_net)
+            hybrid = _extract(image, features, edges, "hybrid", params, p_net, texture)
             if not hybrid_in_doubt(hybrid, params.select_gmm_above):
                 return hybrid
-            gmm = _extract(image, features, edges, "gmm", params)
+            gmm = _extract(image, features, edges, "gmm", params, texture=texture)
             return select_skylines(hybrid, gmm, params.select_tol_px)
         # the two extractors on a thread each (1.43 -> 1.19 s a CH1 photo on 2 cores, the same skylines to the bit);
         # BLAS and OpenMP held to one thread around both, so that neither's own limits, set and restored inside,
         # can widen them under the other
         with one_thread():
-            hybrid, gmm = concurrently(lambda: _extract(image, features, edges, "hybrid", params, p_net),
-                                       lambda: _extract(image, features, edges, "gmm", params))
+            hybrid, gmm = concurrently(lambda: _extract(image, features, edges, "hybrid", params, p_net, texture),
+                                       lambda: _extract(image, features, edges, "gmm", params, texture=texture))
         return select_skylines(hybrid, gmm, params.select_tol_px)
-    return _extract(image, features, edges, params.method, params, p_net)
+    return _extract(image, features, edges, params.method, params, p_net, texture)
 
 
 def _features_and_edges(image: np.ndarray, params: SkylineParams) -> tuple[np.ndarray, np.ndarray]:
@@ -307,24 +309,26 @@ def _features_and_edges(image: np.ndarray, params: SkylineParams) -> tuple[np.nd
     return features, _edge_strength(features, params.edge_percentile)
 
 
-def _extract(image: np.ndarray, features: np.ndarray, edges: np.ndarray, method: str,
-             params: SkylineParams, p_net: np.ndarray | None = None) -> ExtractedSkyline:
+def _extract(image: np.ndarray, features: np.ndarray, edges: np.ndarray | Once, method: str,
+             params: SkylineParams, p_net: np.ndarray | None = None, texture: np.ndarray | Once | None = None,
+             ) -> ExtractedSkyline:
     """One extractor (``method``: gmm, net or hybrid) on a photo whose cables are painted over,
-    its :func:`~.sky.pixel_features` and :func:`_edge_strength` given, and for net and hybrid the
-    network's :func:`net_probability` ``p_net`` (:func:`extract_skyline` runs it beside the features)."""
+    its :func:`~.sky.pixel_features` and :func:`_edge_strength` given (or a :class:`Once` that makes them), and for
+    net and hybrid the network's :func:`net_probability` ``p_net`` (:func:`extract_skyline` runs it beside the
+    features); ``texture``: :func:`_texture_cost` (or its :class:`Once`), None to make it here."""
     H = image.shape[0]
+    if texture is None:
+        texture = Once(lambda: _texture_cost(features, params.texture_weight))
     if method == "gmm":
-        texture = _texture_cost(features, params.texture_weight)
-        p = _gmm_probability(features, edges, texture, params)
-        rows = _boundary(p, _edges_where_p_changes(edges, p, params.edge_contrast), params.edge_bonus,
-                         params.jump_cost, params.jump_cap, texture)
+        p = _gmm_probability(features, edges, made(texture), params)
+        rows = _boundary(p, _edges_where_p_changes(made(edges), p, params.edge_contrast), params.edge_bonus,
+                         params.jump_cost, params.jump_cap, made(texture))
     else:
         p = p_net
-        rows = _boundary(p_net, edges, *_net_boundary_weights(params))
+        rows = _boundary(p_net, made(edges), *_net_boundary_weights(params))
         if method == "hybrid":
-            texture = _texture_cost(features, params.texture_weight)
             p = _hybrid_probability(features, p_net, rows, params)
-            rows = _boundary(p, edges, params.edge_bonus, params.jump_cost, params.jump_cap, texture)
+            rows = _boundary(p, made(edges), params.edge_bonus, params.jump_cost, params.jump_cap, made(texture))
     sub, contrast = _subpixel(features, rows)
     skyline = boundary_skyline(rows, sub, H)
     if method == "gmm":
@@ -414,7 +418,7 @@ def boundary_skyline(rows: np.ndarray, sub: np.ndarray, H: int) -> np.ndarray:
     return np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub))
 
 
-def _gmm_probability(features: np.ndarray, edges: np.ndarray, texture: np.ndarray | None,
+def _gmm_probability(features: np.ndarray, edges: np.ndarray | Once, texture: np.ndarray | None,
                      params: SkylineParams) -> np.ndarray:
     """P(sky) from colour-texture mixtures re-fitted to this photo (``method="gmm"``).
 
@@ -432,7 +436,7 @@ def _gmm_probability(features: np.ndarray, edges: np.ndarray, texture: np.ndarra
         p = sky_probability(draft, sky_mask[::s, ::s], terrain_mask[::s, ::s], _row_prior(draft.shape[0]),
                             components=params.components, seed=round_, tol=tol,
                             max_samples=params.draft_samples if s > 1 else samples)
-        draft_edges = _edge_strength(draft, params.edge_percentile) if s > 1 else edges
+        draft_edges = _edge_strength(draft, params.edge_percentile) if s > 1 else made(edges)
         rows = _boundary(p, _edges_where_p_changes(draft_edges, p, params.edge_contrast), params.edge_bonus,
                          params.jump_cost / s,
                          params.jump_cap, None if texture is None else texture[::s, ::s])
