@@ -816,9 +816,9 @@ def test_select_runs_the_mixtures_only_where_the_hybrid_doubts(builtin_view, mon
     ran = []
     original = extraction._extract
 
-    def counting(image, features, edges, method, params, p_net=None):
+    def counting(image, features, edges, method, params, p_net=None, texture=None):
         ran.append(method)
-        return original(image, features, edges, method, params, p_net)
+        return original(image, features, edges, method, params, p_net, texture)
 
     monkeypatch.setattr(extraction, "_extract", counting)
     hybrid = extract_skyline(image, SkylineParams(method="hybrid", **_select_budget()))
@@ -901,3 +901,88 @@ def test_the_compiled_boundary_search_finds_numpys_path_and_the_cheapest_one():
         found = path_cost(cost, boundary_dp(cost, 0.7, 1.5), 0.7, 1.5)
         cheapest = min(path_cost(cost, np.array(p), 0.7, 1.5) for p in itertools.product(range(4), repeat=5))
         assert found <= cheapest + 1e-9
+
+
+def test_the_seeds_erosion_is_scipys_iterated_cross_erosion():
+    """``initial_seeds`` erodes its seed masks in one OpenCV pass by a diamond: on random masks, sparse to full,
+    that is ``scipy.ndimage.binary_erosion`` by the 4-neighbour cross ``steps`` times, outside the frame False."""
+    from scipy import ndimage
+
+    from skyrender.features.skyline import _eroded
+
+    rng = np.random.default_rng(3)
+    for trial in range(60):
+        shape = (int(rng.integers(1, 40)), int(rng.integers(1, 40)))
+        mask = rng.random(shape) < rng.choice([0.3, 0.8, 0.97, 1.0])
+        steps = int(rng.integers(1, 5))
+        assert np.array_equal(_eroded(mask, steps), ndimage.binary_erosion(mask, iterations=steps)), (trial, steps)
+
+
+def test_pixel_features_and_colour_edges_are_their_formulas_to_the_bit(builtin_view):
+    """The pixel features and colour edges, computed channel by channel in place, are their formulas written out
+    whole (the Lab of the 3 x 3 blurred photo, the 7 x 7 lightness std, the Sobel magnitude / 8; the Lab distance
+    of the two rows above each boundary from the two below, over its 97th percentile), to the bit."""
+    from skyrender.features.sky import pixel_features
+    from skyrender.features.skyline import _edge_strength
+
+    terrain, pose, K = builtin_view
+    image = render_photo(terrain, pose, K, Look(sky="hazy", seed=2)).image
+    lab = cv2.cvtColor(cv2.GaussianBlur(image, (3, 3), 0).astype(np.float32) / 255.0, cv2.COLOR_RGB2Lab)
+    L = lab[..., 0]
+    mean, square = cv2.blur(L, (7, 7)), cv2.blur(L * L, (7, 7))
+    gradient = np.hypot(cv2.Sobel(L, cv2.CV_32F, 1, 0, ksize=3), cv2.Sobel(L, cv2.CV_32F, 0, 1, ksize=3))
+    features = pixel_features(image)
+    np.testing.assert_array_equal(features[..., :3], lab)
+    np.testing.assert_array_equal(features[..., 3], np.sqrt(np.maximum(square - mean * mean, 0)))
+    np.testing.assert_allclose(features[..., 4], gradient / 8.0, rtol=1e-6)  # hypot rounds once, the features twice
+    H = image.shape[0]
+    pad = np.pad(features[..., :3].astype(np.float64), ((2, 2), (0, 0), (0, 0)), mode="edge")
+    step = 0.5 * (pad[0 : H + 1] + pad[1 : H + 2]) - 0.5 * (pad[2 : H + 3] + pad[3 : H + 4])
+    e = np.sqrt(step[..., 0] ** 2 + step[..., 1] ** 2 + step[..., 2] ** 2)
+    e[0] = e[-1] = 0.0
+    np.testing.assert_array_equal(_edge_strength(features, 97.0), np.clip(e / max(np.percentile(e, 97.0), 1.0), 0, 1))
+
+
+def test_select_with_its_lines_sharing_edges_and_texture_is_the_two_lines_run_apart(builtin_view):
+    """``select`` makes the colour edges and texture cost once, on whichever of its two lines asks first: its
+    skyline and confidence are those of the hybrid and gmm lines each given them whole, chosen between."""
+    from skyrender.features import SkylineParams
+    from skyrender.features import skyline as extraction
+
+    terrain, pose, K = builtin_view
+    image = render_photo(terrain, pose, K, Look(sky="overcast", seed=6)).image
+    params = SkylineParams(method="select")
+    shared = extract_skyline(image, params)
+    cleaned, _ = extraction.remove_cables(image, params.cables)
+    features, edges = extraction._features_and_edges(cleaned, params)
+    p_net = extraction.net_probability(cleaned, params.net_weights, net_width=params.net_width)
+    texture = extraction._texture_cost(features, params.texture_weight)
+    apart = extraction.select_skylines(extraction._extract(cleaned, features, edges, "hybrid", params, p_net, texture),
+                                       extraction._extract(cleaned, features, edges, "gmm", params, texture=texture),
+                                       params.select_tol_px)
+    np.testing.assert_array_equal(shared.skyline, apart.skyline)
+    np.testing.assert_array_equal(shared.confidence, apart.confidence)
+
+
+def test_once_makes_its_value_once_whichever_thread_asks_first():
+    """:class:`blocks.Once`: of two threads asking at once, one makes the value and the other waits for it; later
+    requests get it without making it again; :func:`blocks.made` passes anything else through."""
+    import threading
+    import time
+
+    from skyrender.blocks import Once, concurrently, made
+
+    calls = []
+
+    def make():
+        calls.append(threading.get_ident())
+        time.sleep(0.05)  # long enough for the other thread to ask meanwhile
+        return np.arange(3)
+
+    once = Once(make)
+    got = concurrently(once, once)
+    assert len(calls) == 1
+    assert got[0] is got[1] is once() is made(once)
+    assert len(calls) == 1
+    plain = np.ones(2)
+    assert made(plain) is plain

@@ -52,10 +52,13 @@ def cable_mask(image: np.ndarray, params: CableParams = CableParams()) -> np.nda
     # the sides are looked at just beyond the widest cable and further out: where two cables
     # run close, the nearer side of one is the other
     for r in range(w + 1, 3 * w + 2, w):
-        up, down = np.maximum(rows - r, 0), np.minimum(rows + r, H - 1)
-        difference = lab[up, cols] - lab[down, cols]
-        same = np.einsum("ij,ij->i", difference, difference) < params.max_side_difference ** 2
-        sky_both_sides |= same & smooth[up, cols] & smooth[down, cols] & (rows >= r) & (rows < H - r)
+        # the colours compared only where both sides lie in the frame and are smooth, and no nearer side matched
+        at = np.flatnonzero((rows >= r) & (rows < H - r) & ~sky_both_sides)
+        up, down, c = rows[at] - r, rows[at] + r, cols[at]
+        smooth_sides = smooth[up, c] & smooth[down, c]
+        at, up, down, c = at[smooth_sides], up[smooth_sides], down[smooth_sides], c[smooth_sides]
+        difference = lab[up, c] - lab[down, c]
+        sky_both_sides[at] = np.einsum("ij,ij->i", difference, difference) < params.max_side_difference ** 2
     candidate = np.zeros((H, W), np.uint8)
     candidate[rows[sky_both_sides], cols[sky_both_sides]] = 1
     n, labels, stats, _ = cv2.connectedComponentsWithStats(candidate, connectivity=8)

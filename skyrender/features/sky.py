@@ -30,16 +30,24 @@ def pixel_features(image: np.ndarray) -> np.ndarray:
     local lightness std (7 x 7) and Sobel gradient magnitude of lightness."""
     import cv2
 
-    rgb = cv2.GaussianBlur(image, (3, 3), 0).astype(np.float32) / 255.0
+    rgb = cv2.GaussianBlur(image, (3, 3), 0).astype(np.float32)
+    rgb /= 255.0
     lab = cv2.cvtColor(rgb, cv2.COLOR_RGB2Lab)
+    out = np.empty(lab.shape[:2] + (5,), np.float32)  # each feature written into its channel, no stacking copies
+    out[..., :3] = lab
     L = lab[..., 0]
     mean = cv2.blur(L, (7, 7))
-    sq = cv2.blur(L * L, (7, 7))
-    texture = np.sqrt(np.maximum(sq - mean * mean, 0))
+    variance = cv2.blur(L * L, (7, 7))
+    variance -= mean * mean
+    np.sqrt(np.maximum(variance, 0, out=variance), out=out[..., 3])
     gx = cv2.Sobel(L, cv2.CV_32F, 1, 0, ksize=3)
     gy = cv2.Sobel(L, cv2.CV_32F, 0, 1, ksize=3)
-    gradient = np.sqrt(gx * gx + gy * gy) / 8.0
-    return np.dstack([lab, texture, gradient]).astype(np.float32)
+    gx *= gx
+    gy *= gy
+    gx += gy
+    np.sqrt(gx, out=gx)
+    np.divide(gx, 8.0, out=out[..., 4])
+    return out
 
 
 @dataclass(frozen=True)
@@ -213,7 +221,7 @@ def clear_sky_field(features: np.ndarray, sky_mask: np.ndarray, *, max_samples: 
         idx = np.random.default_rng(seed).choice(idx, max_samples, replace=False)
     v, u = np.divmod(idx, W)
     design = _quadratic_design((u + 0.5) / W - 0.5, (v + 0.5) / H - 0.5)
-    lab = features[..., :3].reshape(-1, 3)[idx].astype(np.float64)
+    lab = features.reshape(H * W, -1)[idx, :3].astype(np.float64)  # no copy of every pixel's Lab first
     keep = np.ones(len(idx), dtype=bool)
     for _ in range(3):
         coef = np.linalg.lstsq(design[keep], lab[keep], rcond=None)[0]
@@ -231,11 +239,15 @@ def _quadratic_field(coef: np.ndarray, H: int, W: int) -> np.ndarray:
     u = (np.arange(W) + 0.5) / W - 0.5
     v = (np.arange(H) + 0.5) / H - 0.5
     field = np.empty((H, W, coef.shape[1]), np.float32)
+    value = np.empty((H, W))  # one float64 buffer for every channel, the operations in place
     for c in range(coef.shape[1]):
         k0, ku, kv, kuu, kuv, kvv = coef[:, c]
         constant = (k0 + kv * v + kvv * v * v)[:, None]  # (H, 1)
         linear = (ku + kuv * v)[:, None]  # (H, 1)
-        field[..., c] = constant + u * (linear + kuu * u)
+        np.add(linear, kuu * u, out=value)
+        value *= u
+        value += constant
+        field[..., c] = value  # constant + u * (linear + kuu * u)
     return field
 
 
@@ -322,12 +334,17 @@ def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np
         gmm_sky, gmm_terrain = concurrently(lambda: _fit_gmm(s, components, seed, tol),
                                             lambda: _fit_gmm(t, components, seed + 1, tol))
     x = mixture_inputs(features, row_weight, dtype=np.float32)
-    ll_sky = mixture_log_density(gmm_sky, x)
-    ll_ter = mixture_log_density(gmm_terrain, x)
-    prior = np.clip(np.repeat(row_prior, W), 1e-3, 1 - 1e-3)
-    # the mixtures' evidence saturates at +-10 so that the row and blue-sky priors still count
-    logit = np.clip(ll_sky - ll_ter, -10, 10) + np.log(prior / (1 - prior)) + blue_sky_logit(features).ravel()
+    evidence = mixture_log_density(gmm_sky, x)
+    evidence -= mixture_log_density(gmm_terrain, x)
+    prior = np.clip(row_prior, 1e-3, 1 - 1e-3)
+    # the mixtures' evidence saturates at +-10 so that the row and blue-sky priors still count; the arrays are
+    # (H, W) and worked in place, the row prior's log-odds one value a row
+    logit = np.clip(evidence, -10, 10, out=evidence).reshape(H, W) + np.log(prior / (1 - prior))[:, None]
+    logit += blue_sky_logit(features)
     sky_field = clear_sky_field(features, sky_mask, seed=seed)
     if sky_field is not None:
-        logit -= (shadowed_snow_logit(features, *sky_field) + hazy_ridge_logit(features, *sky_field)).ravel()
-    return (1.0 / (1.0 + np.exp(-logit))).reshape(H, W).astype(np.float32)
+        logit -= shadowed_snow_logit(features, *sky_field) + hazy_ridge_logit(features, *sky_field)
+    np.negative(logit, out=logit)  # the logistic function, in place: 1 / (1 + exp(-logit))
+    np.exp(logit, out=logit)
+    logit += 1.0
+    return np.divide(1.0, logit, out=logit).astype(np.float32)

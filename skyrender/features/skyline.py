@@ -164,16 +164,24 @@ def _edge_strength(features: np.ndarray, percentile: float) -> np.ndarray:
     edges') keeps a faint snow/sky boundary worth almost as much as a hard
     snow/rock edge further down, which would otherwise pull the boundary below it.
     """
-    lab = features[..., :3].astype(np.float64)
-    H = lab.shape[0]
-    pad = np.pad(lab, ((2, 2), (0, 0), (0, 0)), mode="edge")
-    above = 0.5 * (pad[0 : H + 1] + pad[1 : H + 2])  # rows b-2, b-1
-    below = 0.5 * (pad[2 : H + 3] + pad[3 : H + 4])  # rows b, b+1
-    d = above - below
-    e = np.sqrt(d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1] + d[..., 2] * d[..., 2])  # np.linalg.norm's sum, 4x faster
+    H, W = features.shape[:2]
+    e = np.zeros((H + 1, W))
+    pad = np.empty((H + 4, W))  # a channel, its first and last rows repeated twice
+    for c in range(3):  # channel by channel, in place: 0.7x the time of whole (H, W, 3) arrays, the same values
+        pad[2 : H + 2] = features[..., c]
+        pad[:2], pad[H + 2 :] = pad[2], pad[H + 1]
+        above = pad[0 : H + 1] + pad[1 : H + 2]  # rows b-2, b-1
+        above *= 0.5
+        below = pad[2 : H + 3] + pad[3 : H + 4]  # rows b, b+1
+        below *= 0.5
+        above -= below
+        above *= above
+        e += above  # the squares summed in channel order, as np.linalg.norm does
+    np.sqrt(e, out=e)
     e[0] = e[-1] = 0.0
     scale = max(np.percentile(e, percentile), 1.0)
-    return np.clip(e / scale, 0, 1)
+    e /= scale
+    return np.clip(e, 0, 1, out=e)
 
 
 def _row_prior(H: int) -> np.ndarray:
@@ -238,6 +246,19 @@ def _top_components(features: np.ndarray, labels: np.ndarray, max_lab_distance: 
     return top[sky_like], top[~sky_like]
 
 
+def _eroded(mask: np.ndarray, steps: int) -> np.ndarray:
+    """(H, W) bool: ``mask`` eroded ``steps`` times by the 4-neighbour cross, outside the frame counting as False,
+    as ``scipy.ndimage.binary_erosion(mask, iterations=steps)`` gives it, in one pass of OpenCV's erosion by the
+    diamond the crosses add up to (30x faster on a 1024-wide photo)."""
+    import cv2
+
+    r = np.abs(np.arange(-steps, steps + 1))
+    diamond = (r[:, None] + r[None, :] <= steps).astype(np.uint8)
+    out = cv2.erode(np.ascontiguousarray(mask, dtype=bool).view(np.uint8), diamond,
+                    borderType=cv2.BORDER_CONSTANT, borderValue=0)
+    return out.view(bool)
+
+
 def initial_seeds(features: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """First-round training pixels: sky = the smooth region connected to the top edge
     (sky is the smoothest thing that touches the top of a landscape photo); terrain =
@@ -251,8 +272,8 @@ def initial_seeds(features: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     labels, _ = ndimage.label(smooth)
     sky_labels, slope_labels = _top_components(features, labels)
     sky_region = np.isin(labels, sky_labels) & smooth
-    slope = ndimage.binary_erosion(np.isin(labels, slope_labels) & smooth, iterations=3)
-    sky = ndimage.binary_erosion(sky_region, iterations=3)
+    slope = _eroded(np.isin(labels, slope_labels) & smooth, 3)
+    sky = _eroded(sky_region, 3)
     # a sliver of sky (a slope fills most of the frame): all of it, rather than the top rows, which the slope may fill
     sliver = sky.sum() < 0.01 * H * W and sky_region.sum() >= 0.002 * H * W
     if sliver:
