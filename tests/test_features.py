@@ -986,3 +986,19 @@ def test_once_makes_its_value_once_whichever_thread_asks_first():
     assert len(calls) == 1
     plain = np.ones(2)
     assert made(plain) is plain
+
+
+def test_row_prefix_sums_are_numpys_cumsum_down_the_rows_to_the_bit():
+    """:func:`row_prefix_sums` adds a row at a time: the values are ``np.cumsum(a, axis=0, dtype=dtype)`` below a
+    zero row, in float64, to the bit, whatever the input's dtype, the accumulation's and the trailing shape."""
+    from skyrender.features.skyline import row_prefix_sums
+
+    rng = np.random.default_rng(8)
+    for shape in [(1, 5), (2, 1), (767, 64), (40, 7, 3)]:
+        for dtype in (np.float32, np.float64):
+            a = (rng.random(shape) * 3 - 1).astype(dtype)
+            for acc in (None, np.float64):
+                want = np.concatenate([np.zeros((1,) + shape[1:]), np.cumsum(a, axis=0, dtype=acc)])
+                got = row_prefix_sums(a, acc)
+                assert got.dtype == np.float64
+                np.testing.assert_array_equal(got, want)

@@ -69,8 +69,19 @@ def _squared_distances(a: np.ndarray, x: np.ndarray, x_norms: np.ndarray) -> np.
 
 
 def _nearest_centre(x: np.ndarray, centres: np.ndarray) -> np.ndarray:
-    """(N,) index of each row's nearest centre (the first on a tie)."""
-    return np.argmin(np.einsum("ij,ij->i", centres, centres)[None, :] - 2.0 * (x @ centres.T), axis=1)
+    """(N,) index of each row's nearest centre (the first on a tie): the least |c|^2 - 2 x.c, as
+    ``np.argmin(..., axis=1)`` finds it, with one pass per centre instead (an argmin along a short axis goes row
+    by row, 1.5x slower)."""
+    norms = np.einsum("ij,ij->i", centres, centres)
+    twice = np.ascontiguousarray((x @ centres.T).T)  # (k, N): a centre's products with every row in one run
+    twice *= 2.0
+    nearest = np.zeros(len(x), np.intp)
+    least = norms[0] - twice[0]
+    for j in range(1, len(centres)):
+        distance = norms[j] - twice[j]
+        nearest[distance < least] = j  # strictly less: the first centre keeps a tie
+        np.minimum(least, distance, out=least)
+    return nearest
 
 
 def _cluster_means(x: np.ndarray, labels: np.ndarray, centres: np.ndarray) -> np.ndarray:

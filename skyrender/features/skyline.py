@@ -451,7 +451,7 @@ def _gmm_probability(features: np.ndarray, edges: np.ndarray | Once, texture: np
     v = np.arange(H)[:, None]
     sky_mask, terrain_mask = initial_seeds(features)
     s = max(1, int(params.draft_scale)) if W >= params.draft_min_width else 1
-    draft = features[::s, ::s]
+    draft = np.ascontiguousarray(features[::s, ::s])  # once, rather than a copy in each use of a strided view
     tol, samples = params.mixture_budget()
     for round_ in range(params.rounds - 1):
         p = sky_probability(draft, sky_mask[::s, ::s], terrain_mask[::s, ::s], _row_prior(draft.shape[0]),
@@ -485,7 +485,7 @@ def _edges_where_p_changes(edges: np.ndarray, p: np.ndarray, gain: float, reach:
     if not gain:
         return edges
     H, W = p.shape
-    csum = np.vstack([np.zeros((1, W)), np.cumsum(p, axis=0, dtype=np.float64)])
+    csum = row_prefix_sums(p, np.float64)
     b = np.arange(H + 1)[:, None]
     cols = np.arange(W)[None, :]
     top, bottom = np.clip(b - reach, 0, H), np.clip(b + reach, 0, H)
@@ -494,14 +494,29 @@ def _edges_where_p_changes(edges: np.ndarray, p: np.ndarray, gain: float, reach:
     return edges * np.clip(gain * np.abs(above - below), 0.0, 1.0)
 
 
+def row_prefix_sums(a: np.ndarray, dtype=None) -> np.ndarray:
+    """(H+1, ...) float64 sums of the rows of ``a`` (H, ...) above each row index: row k the sum of rows 0..k-1 (row 0
+    zeros), accumulated row after row in ``dtype`` (None: ``a``'s), as ``np.cumsum(a, axis=0, dtype=dtype)`` with a
+    zero row on top, to the bit. One vector add a row: numpy's accumulation down the first axis of a C-order array
+    goes element by element, 10x slower on a photo."""
+    out = np.zeros((len(a) + 1,) + a.shape[1:])
+    acc = out[1:] if np.dtype(dtype or a.dtype) == out.dtype else np.empty(a.shape, dtype or a.dtype)
+    if len(a):
+        acc[0] = a[0]
+        for k in range(1, len(a)):
+            np.add(acc[k - 1], a[k], out=acc[k])
+    if acc.base is not out:
+        out[1:] = acc
+    return out
+
+
 def _boundary(p: np.ndarray, edges: np.ndarray, edge_bonus: float, jump_cost: float, jump_cap: float,
               texture: np.ndarray | None = None) -> np.ndarray:
     """(W,) integer boundary row per column (H: all sky) minimising misclassified
     probability mass (plus ``texture`` cost on the sky side) minus the colour-edge bonus
     (``edges`` from :func:`_edge_strength`), with the jump penalty (:func:`boundary_dp`)."""
-    W = p.shape[1]
     sky_cost = 1.0 - p if texture is None else (1.0 - p) + texture  # what labelling a pixel sky costs
-    unary = np.vstack([np.zeros((1, W)), np.cumsum(sky_cost - p, axis=0)])
+    unary = row_prefix_sums(sky_cost - p)
     return boundary_dp(unary - edge_bonus * edges, jump_cost, jump_cap)
 
 
@@ -512,7 +527,7 @@ def confidence_features(p: np.ndarray, rows: np.ndarray, contrast: np.ndarray, s
     and the probability's own uncertainty at the boundary row (1 - |2p - 1|)."""
     H, W = p.shape
     cols = np.arange(W)
-    csum = np.vstack([np.zeros((1, W)), np.cumsum(p, axis=0)])  # csum[k] = sum of p over rows < k
+    csum = row_prefix_sums(p)  # csum[k] = sum of p over rows < k
 
     def band_mean(start, stop, default):
         start, stop = np.clip(start, 0, H), np.clip(stop, 0, H)
