@@ -816,9 +816,9 @@ def test_select_runs_the_mixtures_only_where_the_hybrid_doubts(builtin_view, mon
     ran = []
     original = extraction._extract
 
-    def counting(image, features, edges, method, params, p_net=None, texture=None):
+    def counting(image, features, edges, method, params, p_net=None, work=None):
         ran.append(method)
-        return original(image, features, edges, method, params, p_net, texture)
+        return original(image, features, edges, method, params, p_net, work)
 
     monkeypatch.setattr(extraction, "_extract", counting)
     hybrid = extract_skyline(image, SkylineParams(method="hybrid", **_select_budget()))
@@ -943,9 +943,10 @@ def test_pixel_features_and_colour_edges_are_their_formulas_to_the_bit(builtin_v
     np.testing.assert_array_equal(_edge_strength(features, 97.0), np.clip(e / max(np.percentile(e, 97.0), 1.0), 0, 1))
 
 
-def test_select_with_its_lines_sharing_edges_and_texture_is_the_two_lines_run_apart(builtin_view):
-    """``select`` makes the colour edges and texture cost once, on whichever of its two lines asks first: its
-    skyline and confidence are those of the hybrid and gmm lines each given them whole, chosen between."""
+def test_select_with_its_lines_sharing_work_is_the_two_lines_run_apart(builtin_view):
+    """``select`` makes the colour edges, texture cost and the mixtures' per-pixel inputs once (:class:`PhotoWork`),
+    on whichever of its two lines asks first: its skyline and confidence are those of the hybrid and gmm lines each
+    making them itself, chosen between."""
     from skyrender.features import SkylineParams
     from skyrender.features import skyline as extraction
 
@@ -956,9 +957,8 @@ def test_select_with_its_lines_sharing_edges_and_texture_is_the_two_lines_run_ap
     cleaned, _ = extraction.remove_cables(image, params.cables)
     features, edges = extraction._features_and_edges(cleaned, params)
     p_net = extraction.net_probability(cleaned, params.net_weights, net_width=params.net_width)
-    texture = extraction._texture_cost(features, params.texture_weight)
-    apart = extraction.select_skylines(extraction._extract(cleaned, features, edges, "hybrid", params, p_net, texture),
-                                       extraction._extract(cleaned, features, edges, "gmm", params, texture=texture),
+    apart = extraction.select_skylines(extraction._extract(cleaned, features, edges, "hybrid", params, p_net),
+                                       extraction._extract(cleaned, features, edges, "gmm", params),
                                        params.select_tol_px)
     np.testing.assert_array_equal(shared.skyline, apart.skyline)
     np.testing.assert_array_equal(shared.confidence, apart.confidence)

@@ -257,33 +257,44 @@ def blue_field_weight(field: np.ndarray) -> np.ndarray:
     return np.clip((-field[..., 2] - 10.0) / 10.0, 0, 1)
 
 
-def shadowed_snow_logit(features: np.ndarray, field: np.ndarray, sigma: float, weight: float = 20.0) -> np.ndarray:
+def shadowed_snow_logit(features: np.ndarray, field: np.ndarray, sigma: float, weight: float = 20.0,
+                        blue_weight: np.ndarray | None = None) -> np.ndarray:
     """(H, W) log-odds penalty for pixels darker than the clear-sky field at their position.
 
     Counts where the field itself is blue (b* below -10, fully below -20): in a clear
     blue sky nothing is more than max(4, 3 sigma) Lab L units darker than the sky around
     it, but a snow face in shadow is, while it is as blue and smooth as sky. Under a
     cloudy sky the field is grey and the blue gaps are darker than it: no penalty there.
+    ``blue_weight``: :func:`blue_field_weight` of the field, where already made.
     """
     darker = field[..., 0] - features[..., 0]
-    threshold = max(4.0, 3.0 * sigma)
-    return weight * blue_field_weight(field) * np.clip((darker - threshold) / 6.0, 0, 1)
+    darker -= max(4.0, 3.0 * sigma)  # in place from here, the operations in the order of the formula
+    darker /= 6.0
+    penalty = (blue_field_weight(field) if blue_weight is None else blue_weight) * weight
+    penalty *= np.clip(darker, 0, 1, out=darker)
+    return penalty  # weight * blue_field_weight(field) * clip((darker - threshold) / 6, 0, 1)
 
 
-def hazy_ridge_logit(features: np.ndarray, field: np.ndarray, sigma: float, weight: float = 20.0) -> np.ndarray:
+def hazy_ridge_logit(features: np.ndarray, field: np.ndarray, sigma: float, weight: float = 20.0,
+                     blue_weight: np.ndarray | None = None) -> np.ndarray:
     """(H, W) log-odds penalty for pixels greyer than a blue clear-sky field, yet no brighter.
 
     A distant snow ridge seen through haze has the sky's lightness but is markedly
     less blue (weisshorn: sky L 62, b* -35; the ridge L 60, b* -22). Pixels more than
     max(8, 3 sigma) b* units less blue than the field are penalised, unless they are
     over 4 L units brighter than it: clouds are that, and clouds are sky. Counts only
-    where the field itself is blue, as :func:`shadowed_snow_logit` does.
+    where the field itself is blue, as :func:`shadowed_snow_logit` does (``blue_weight``: as there).
     """
     greyer = features[..., 2] - field[..., 2]
-    brighter = features[..., 0] - field[..., 0]
-    threshold = max(8.0, 3.0 * sigma)
-    no_brighter = np.clip((4.0 - brighter) / 4.0, 0, 1)
-    return weight * blue_field_weight(field) * np.clip((greyer - threshold) / 6.0, 0, 1) * no_brighter
+    greyer -= max(8.0, 3.0 * sigma)  # in place from here, the operations in the order of the formula
+    greyer /= 6.0
+    no_brighter = features[..., 0] - field[..., 0]  # how much brighter, then how far from 4 L units brighter
+    np.subtract(4.0, no_brighter, out=no_brighter)
+    no_brighter /= 4.0
+    penalty = (blue_field_weight(field) if blue_weight is None else blue_weight) * weight
+    penalty *= np.clip(greyer, 0, 1, out=greyer)
+    penalty *= np.clip(no_brighter, 0, 1, out=no_brighter)
+    return penalty  # weight * blue_field_weight(field) * clip((greyer - threshold) / 6, 0, 1) * no_brighter
 
 
 #: The image row's weight among the mixtures' features (the row, 0-1 down the frame, times this).
@@ -308,13 +319,17 @@ def mixture_inputs(features: np.ndarray, row_weight: float = ROW_WEIGHT, *, pixe
 
 def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np.ndarray,
                     row_prior: np.ndarray, *, components: int = 5, max_samples: int = MIXTURE_SAMPLES,
-                    tol: float = GMM_TOL, row_weight: float = ROW_WEIGHT, seed: int = 0) -> np.ndarray:
+                    tol: float = GMM_TOL, row_weight: float = ROW_WEIGHT, seed: int = 0,
+                    pixel_rows=None, blue_logit=None) -> np.ndarray:
     """(H, W) P(sky) from colour-texture mixtures fitted to the given sky / terrain pixels.
 
     ``row_prior`` (H,) is the prior P(sky) per row; the mixtures are fitted on at most ``max_samples``
     pixels a class, their EM stopped at ``tol`` (:func:`_fit_gmm`). Deterministic for a seed.
+    ``pixel_rows`` (``mixture_inputs(features, row_weight, dtype=np.float32)``) and ``blue_logit``
+    (``blue_sky_logit(features)``), or :class:`~skyrender.blocks.Once` makers of them, where another
+    call on the same features shares them; None: made here.
     """
-    from ..blocks import concurrently, one_thread
+    from ..blocks import concurrently, made, one_thread
 
     H, W = features.shape[:2]
     rng = np.random.default_rng(seed)
@@ -333,17 +348,20 @@ def sky_probability(features: np.ndarray, sky_mask: np.ndarray, terrain_mask: np
     with one_thread("blas"):
         gmm_sky, gmm_terrain = concurrently(lambda: _fit_gmm(s, components, seed, tol),
                                             lambda: _fit_gmm(t, components, seed + 1, tol))
-    x = mixture_inputs(features, row_weight, dtype=np.float32)
+    x = mixture_inputs(features, row_weight, dtype=np.float32) if pixel_rows is None else made(pixel_rows)
     evidence = mixture_log_density(gmm_sky, x)
     evidence -= mixture_log_density(gmm_terrain, x)
     prior = np.clip(row_prior, 1e-3, 1 - 1e-3)
     # the mixtures' evidence saturates at +-10 so that the row and blue-sky priors still count; the arrays are
     # (H, W) and worked in place, the row prior's log-odds one value a row
     logit = np.clip(evidence, -10, 10, out=evidence).reshape(H, W) + np.log(prior / (1 - prior))[:, None]
-    logit += blue_sky_logit(features)
+    logit += blue_sky_logit(features) if blue_logit is None else made(blue_logit)
     sky_field = clear_sky_field(features, sky_mask, seed=seed)
     if sky_field is not None:
-        logit -= shadowed_snow_logit(features, *sky_field) + hazy_ridge_logit(features, *sky_field)
+        blue = blue_field_weight(sky_field[0])
+        penalty = shadowed_snow_logit(features, *sky_field, blue_weight=blue)
+        penalty += hazy_ridge_logit(features, *sky_field, blue_weight=blue)
+        logit -= penalty
     np.negative(logit, out=logit)  # the logistic function, in place: 1 / (1 + exp(-logit))
     np.exp(logit, out=logit)
     logit += 1.0

@@ -38,7 +38,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..blocks import Once, concurrently, made, one_thread
+from ..blocks import Once, concurrently, one_thread
 from .cables import CableParams, remove_cables
 from .sky import GMM_TOL, MIXTURE_SAMPLES, pixel_features, sky_probability
 from .sky_net import NET_WIDTH, sky_logits
@@ -302,26 +302,25 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
     else:  # the network needs only the image: it runs beside the pixel features, on the core they leave idle
         features, p_net = concurrently(lambda: pixel_features(image),
                                        lambda: net_probability(image, params.net_weights, net_width=params.net_width))
-    # made on first request, by whichever line asks first: with select the hybrid's line makes the colour edges (it
-    # needs them at once, gmm's line only for its last boundary) and gmm's the texture cost, off gmm's longer line
-    edges = Once(lambda: _edge_strength(features, params.edge_percentile))
-    texture = Once(lambda: _texture_cost(features, params.texture_weight))
+    # each part made by whichever line asks first: with select the hybrid's line makes the colour edges (it needs them
+    # at once, gmm's line only for its last boundary) and the mixtures' inputs, off gmm's longer line
+    work = PhotoWork.of(features, params)
     if params.method == "select":
         if params.select_gmm_above > 0:
             # the hybrid first, on both cores; gmm only where the hybrid doubts more than a few columns
-            hybrid = _extract(image, features, edges, "hybrid", params, p_net, texture)
+            hybrid = _extract(image, features, None, "hybrid", params, p_net, work)
             if not hybrid_in_doubt(hybrid, params.select_gmm_above):
                 return hybrid
-            gmm = _extract(image, features, edges, "gmm", params, texture=texture)
+            gmm = _extract(image, features, None, "gmm", params, work=work)
             return select_skylines(hybrid, gmm, params.select_tol_px)
         # the two extractors on a thread each (1.43 -> 1.19 s a CH1 photo on 2 cores, the same skylines to the bit);
         # BLAS and OpenMP held to one thread around both, so that neither's own limits, set and restored inside,
         # can widen them under the other
         with one_thread():
-            hybrid, gmm = concurrently(lambda: _extract(image, features, edges, "hybrid", params, p_net, texture),
-                                       lambda: _extract(image, features, edges, "gmm", params, texture=texture))
+            hybrid, gmm = concurrently(lambda: _extract(image, features, None, "hybrid", params, p_net, work),
+                                       lambda: _extract(image, features, None, "gmm", params, work=work))
         return select_skylines(hybrid, gmm, params.select_tol_px)
-    return _extract(image, features, edges, params.method, params, p_net, texture)
+    return _extract(image, features, None, params.method, params, p_net, work)
 
 
 def _features_and_edges(image: np.ndarray, params: SkylineParams) -> tuple[np.ndarray, np.ndarray]:
@@ -330,26 +329,50 @@ def _features_and_edges(image: np.ndarray, params: SkylineParams) -> tuple[np.nd
     return features, _edge_strength(features, params.edge_percentile)
 
 
-def _extract(image: np.ndarray, features: np.ndarray, edges: np.ndarray | Once, method: str,
-             params: SkylineParams, p_net: np.ndarray | None = None, texture: np.ndarray | Once | None = None,
+@dataclass(frozen=True)
+class PhotoWork:
+    """What every extractor of one photo computes alike from its pixel features, each part made once, on first
+    request, by whichever extractor asks first (:class:`~skyrender.blocks.Once`; ``select`` runs two at once):
+    the colour edges (:func:`_edge_strength`), the texture cost (:func:`_texture_cost`), and the colour
+    mixtures' inputs for every pixel (:func:`~.sky.mixture_inputs`) and blue-sky bonus (:func:`~.sky.blue_sky_logit`)."""
+
+    edges: Once
+    texture: Once
+    pixel_rows: Once
+    blue_logit: Once
+
+    @classmethod
+    def of(cls, features: np.ndarray, params: SkylineParams, edges: np.ndarray | Once | None = None) -> PhotoWork:
+        """The work on ``features`` (H, W, 5); ``edges`` already made (or a :class:`Once`), None: made on request."""
+        from .sky import blue_sky_logit, mixture_inputs
+
+        return cls(edges if isinstance(edges, Once) else
+                   Once(lambda: _edge_strength(features, params.edge_percentile)) if edges is None else Once(lambda: edges),
+                   Once(lambda: _texture_cost(features, params.texture_weight)),
+                   Once(lambda: mixture_inputs(features, dtype=np.float32)),
+                   Once(lambda: blue_sky_logit(features)))
+
+
+def _extract(image: np.ndarray, features: np.ndarray, edges: np.ndarray | Once | None, method: str,
+             params: SkylineParams, p_net: np.ndarray | None = None, work: PhotoWork | None = None,
              ) -> ExtractedSkyline:
     """One extractor (``method``: gmm, net or hybrid) on a photo whose cables are painted over,
-    its :func:`~.sky.pixel_features` and :func:`_edge_strength` given (or a :class:`Once` that makes them), and for
-    net and hybrid the network's :func:`net_probability` ``p_net`` (:func:`extract_skyline` runs it beside the
-    features); ``texture``: :func:`_texture_cost` (or its :class:`Once`), None to make it here."""
+    its :func:`~.sky.pixel_features` and :func:`_edge_strength` given (or ``work``, where other extractors of the photo
+    share it: then ``edges`` is not looked at), and for net and hybrid the network's :func:`net_probability` ``p_net``
+    (:func:`extract_skyline` runs it beside the features)."""
     H = image.shape[0]
-    if texture is None:
-        texture = Once(lambda: _texture_cost(features, params.texture_weight))
+    if work is None:
+        work = PhotoWork.of(features, params, edges)
     if method == "gmm":
-        p = _gmm_probability(features, edges, made(texture), params)
-        rows = _boundary(p, _edges_where_p_changes(made(edges), p, params.edge_contrast), params.edge_bonus,
-                         params.jump_cost, params.jump_cap, made(texture))
+        p = _gmm_probability(features, work, params)
+        rows = _boundary(p, _edges_where_p_changes(work.edges(), p, params.edge_contrast), params.edge_bonus,
+                         params.jump_cost, params.jump_cap, work.texture())
     else:
         p = p_net
-        rows = _boundary(p_net, made(edges), *_net_boundary_weights(params))
+        rows = _boundary(p_net, work.edges(), *_net_boundary_weights(params))
         if method == "hybrid":
-            p = _hybrid_probability(features, p_net, rows, params)
-            rows = _boundary(p, made(edges), params.edge_bonus, params.jump_cost, params.jump_cap, made(texture))
+            p = _hybrid_probability(features, p_net, rows, params, work)
+            rows = _boundary(p, work.edges(), params.edge_bonus, params.jump_cost, params.jump_cap, work.texture())
     sub, contrast = _subpixel(features, rows)
     skyline = boundary_skyline(rows, sub, H)
     if method == "gmm":
@@ -394,7 +417,8 @@ def _net_boundary_weights(params: SkylineParams) -> tuple[float, float, float]:
                  for k in ("net_edge_bonus", "net_jump_cost", "net_jump_cap"))
 
 
-def _hybrid_probability(features: np.ndarray, p_net: np.ndarray, rows: np.ndarray, params: SkylineParams) -> np.ndarray:
+def _hybrid_probability(features: np.ndarray, p_net: np.ndarray, rows: np.ndarray, params: SkylineParams,
+                        work: PhotoWork | None = None) -> np.ndarray:
     """P(sky) of ``method="hybrid"``: the network finds the boundary (it does not lose the
     sky to a bad first guess, as per-photo mixtures can), then colour-texture mixtures are
     fitted to *this* photo's pixels on either side of it, ``params.band`` px clear, and
@@ -409,17 +433,26 @@ def _hybrid_probability(features: np.ndarray, p_net: np.ndarray, rows: np.ndarra
     terrain = (v >= rows[None, :] + params.band) & (p_net < 0.5)
     tol, samples = params.mixture_budget()
     p_colour = sky_probability(features, sky, terrain, _row_prior(H), components=params.components,
-                               max_samples=samples, tol=tol, seed=0)
-    logit = HYBRID_NET_WEIGHT * _logit(p_net) + _logit(p_colour)
-    return (1.0 / (1.0 + np.exp(-logit))).astype(np.float32)
+                               max_samples=samples, tol=tol, seed=0, pixel_rows=work and work.pixel_rows,
+                               blue_logit=work and work.blue_logit)
+    logit = _logit(p_net)
+    logit *= HYBRID_NET_WEIGHT
+    logit += _logit(p_colour)
+    np.negative(logit, out=logit)  # the logistic function, in place: 1 / (1 + exp(-logit))
+    np.exp(logit, out=logit)
+    logit += 1.0
+    return np.divide(1.0, logit, out=logit).astype(np.float32, copy=False)
 
 
 HYBRID_NET_WEIGHT = 0.5
 
 
 def _logit(p: np.ndarray) -> np.ndarray:
+    """log(p / (1 - p)) of ``p`` clipped to [1e-4, 1 - 1e-4], in ``p``'s dtype (a new array)."""
     p = np.clip(p, 1e-4, 1 - 1e-4)
-    return np.log(p / (1 - p))
+    odds = np.subtract(1, p)
+    np.divide(p, odds, out=odds)
+    return np.log(odds, out=odds)
 
 
 def net_probability(image: np.ndarray, weights: str | None = None, net_width: int = NET_WIDTH) -> np.ndarray:
@@ -439,9 +472,9 @@ def boundary_skyline(rows: np.ndarray, sub: np.ndarray, H: int) -> np.ndarray:
     return np.where(rows >= H, np.nan, np.where(rows <= 0, 0.0, sub))
 
 
-def _gmm_probability(features: np.ndarray, edges: np.ndarray | Once, texture: np.ndarray | None,
-                     params: SkylineParams) -> np.ndarray:
-    """P(sky) from colour-texture mixtures re-fitted to this photo (``method="gmm"``).
+def _gmm_probability(features: np.ndarray, work: PhotoWork, params: SkylineParams) -> np.ndarray:
+    """P(sky) from colour-texture mixtures re-fitted to this photo (``method="gmm"``; ``work``: its
+    :class:`PhotoWork`).
 
     With ``params.draft_scale`` > 1 the rounds before the last, which only place the next
     round's training pixels, run on every ``draft_scale``-th row and column and fit on
@@ -452,12 +485,14 @@ def _gmm_probability(features: np.ndarray, edges: np.ndarray | Once, texture: np
     sky_mask, terrain_mask = initial_seeds(features)
     s = max(1, int(params.draft_scale)) if W >= params.draft_min_width else 1
     draft = np.ascontiguousarray(features[::s, ::s])  # once, rather than a copy in each use of a strided view
+    texture = work.texture()
     tol, samples = params.mixture_budget()
     for round_ in range(params.rounds - 1):
+        full = {} if s > 1 else {"pixel_rows": work.pixel_rows, "blue_logit": work.blue_logit}
         p = sky_probability(draft, sky_mask[::s, ::s], terrain_mask[::s, ::s], _row_prior(draft.shape[0]),
                             components=params.components, seed=round_, tol=tol,
-                            max_samples=params.draft_samples if s > 1 else samples)
-        draft_edges = _edge_strength(draft, params.edge_percentile) if s > 1 else made(edges)
+                            max_samples=params.draft_samples if s > 1 else samples, **full)
+        draft_edges = _edge_strength(draft, params.edge_percentile) if s > 1 else work.edges()
         rows = _boundary(p, _edges_where_p_changes(draft_edges, p, params.edge_contrast), params.edge_bonus,
                          params.jump_cost / s,
                          params.jump_cap, None if texture is None else texture[::s, ::s])
@@ -465,7 +500,8 @@ def _gmm_probability(features: np.ndarray, edges: np.ndarray | Once, texture: np
         sky_mask = v < rows[None, :] - params.band
         terrain_mask = v >= rows[None, :] + params.band
     return sky_probability(features, sky_mask, terrain_mask, _row_prior(H), components=params.components,
-                           max_samples=samples, tol=tol, seed=params.rounds - 1)
+                           max_samples=samples, tol=tol, seed=params.rounds - 1, pixel_rows=work.pixel_rows,
+                           blue_logit=work.blue_logit)
 
 
 def _texture_cost(features: np.ndarray, weight: float) -> np.ndarray | None:
