@@ -198,14 +198,15 @@ def _subpixel(features: np.ndarray, rows: np.ndarray) -> np.ndarray:
     2 rows: a strong edge saturates the edge term over two neighbouring rows, so the
     integer boundary can sit one row off the colour transition.
     """
-    lab = features[..., :3].astype(np.float64)
-    H, W = lab.shape[:2]
+    H, W = features.shape[:2]
     cols = np.arange(W)
     k = 3
 
+    def lab_at(r):  # (n, W, 3) float64 Lab at rows r (n, W) of each column: gathered, then cast, not the whole photo
+        return features[r, cols[None, :], :3].astype(np.float64)
+
     def rows_mean(offsets):
-        r = np.clip(rows[None, :] + np.array(offsets)[:, None], 0, H - 1)
-        return lab[r, cols[None, :]].mean(axis=0)
+        return lab_at(np.clip(rows[None, :] + np.array(offsets)[:, None], 0, H - 1)).mean(axis=0)
 
     sky = rows_mean([-5, -4, -3])
     ter = rows_mean([2, 3, 4])
@@ -213,7 +214,7 @@ def _subpixel(features: np.ndarray, rows: np.ndarray) -> np.ndarray:
     norm2 = np.maximum(np.sum(axis**2, axis=1), 1e-9)
     offsets = np.arange(-k, k)
     r = np.clip(rows[None, :] + offsets[:, None], 0, H - 1)
-    s = np.sum((lab[r, cols[None, :]] - ter[None]) * axis[None], axis=2) / norm2[None]
+    s = np.sum((lab_at(r) - ter[None]) * axis[None], axis=2) / norm2[None]
     coverage = np.clip(s, 0, 1).sum(axis=0)
     refined = rows - k + coverage
     contrast = np.sqrt(norm2)
