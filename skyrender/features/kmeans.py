@@ -26,8 +26,8 @@ def kmeans_labels(samples: np.ndarray, n_clusters: int, seed: int) -> np.ndarray
     centres = _kmeans_plusplus(x, n_clusters, np.random.RandomState(seed))
     previous = np.full(len(x), -1)
     for _ in range(KMEANS_MAX_ITER):
-        labels = _nearest_centre(x, centres)
-        new = _cluster_means(x, labels, centres)
+        labels, sums, count = _assign(x, centres)
+        new = _cluster_means(x, labels, centres, sums, count)
         shift = ((new - centres) ** 2).sum()
         centres = new
         if np.array_equal(labels, previous):
@@ -35,7 +35,16 @@ def kmeans_labels(samples: np.ndarray, n_clusters: int, seed: int) -> np.ndarray
         if shift <= tol:
             break
         previous = labels
-    return _nearest_centre(x, centres)  # the labels of the last centres
+    return _assign(x, centres)[0]  # the labels of the last centres
+
+
+def _assign(x: np.ndarray, centres: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(labels (N,): each row's nearest centre, the first on a tie; sums (k, D) of each cluster's rows in row
+    order; counts (k,) float64): the distances |c|^2 - 2 x.c from one matrix product, the rest compiled
+    (:func:`.kmeans_kernel.assign_and_sum`)."""
+    from .kmeans_kernel import assign_and_sum  # numba: imported, and compiled or loaded from its cache, on first use
+
+    return assign_and_sum(x @ centres.T, np.einsum("ij,ij->i", centres, centres), x)
 
 
 def _kmeans_plusplus(x: np.ndarray, k: int, rng: np.random.RandomState) -> np.ndarray:
@@ -68,28 +77,11 @@ def _squared_distances(a: np.ndarray, x: np.ndarray, x_norms: np.ndarray) -> np.
     return np.maximum(d, 0, out=d)
 
 
-def _nearest_centre(x: np.ndarray, centres: np.ndarray) -> np.ndarray:
-    """(N,) index of each row's nearest centre (the first on a tie): the least |c|^2 - 2 x.c, as
-    ``np.argmin(..., axis=1)`` finds it, with one pass per centre instead (an argmin along a short axis goes row
-    by row, 1.5x slower)."""
-    norms = np.einsum("ij,ij->i", centres, centres)
-    twice = np.ascontiguousarray((x @ centres.T).T)  # (k, N): a centre's products with every row in one run
-    twice *= 2.0
-    nearest = np.zeros(len(x), np.intp)
-    least = norms[0] - twice[0]
-    for j in range(1, len(centres)):
-        distance = norms[j] - twice[j]
-        nearest[distance < least] = j  # strictly less: the first centre keeps a tie
-        np.minimum(least, distance, out=least)
-    return nearest
-
-
-def _cluster_means(x: np.ndarray, labels: np.ndarray, centres: np.ndarray) -> np.ndarray:
-    """(k, D) mean of each cluster's rows (sums in row order); an empty cluster takes the row
-    farthest from its own centre, one such row per empty cluster, from the cluster it left."""
-    k = len(centres)
-    count = np.bincount(labels, minlength=k).astype(np.float64)
-    sums = np.stack([np.bincount(labels, weights=column, minlength=k) for column in x.T], axis=1)
+def _cluster_means(x: np.ndarray, labels: np.ndarray, centres: np.ndarray, sums: np.ndarray,
+                   count: np.ndarray) -> np.ndarray:
+    """(k, D) mean of each cluster's rows from their ``sums`` (k, D, in row order) and ``count`` (k,); an empty
+    cluster takes the row farthest from its own centre, one such row per empty cluster, from the cluster it left
+    (``sums`` and ``count`` changed in place then)."""
     empty = np.flatnonzero(count == 0)
     if len(empty):
         farthest = np.argpartition(((x - centres[labels]) ** 2).sum(axis=1), -len(empty))[:-len(empty) - 1:-1]
