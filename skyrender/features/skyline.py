@@ -57,10 +57,10 @@ def fitted_path(net_width: int = NET_WIDTH, net_weights: str | None = None) -> s
 @dataclass(frozen=True)
 class SkylineParams:
     # "gmm": per-photo colour mixtures (default: it also holds on renders); "net": the learned
-    # sky probability (24x faster, not trained on renders); "hybrid": the network's boundary
-    # seeds per-photo mixtures (0.5 s); "select": hybrid and gmm both, and where they part, the one
-    # more confident on the disputed columns (:func:`select_skylines`; best on unseen real photos, 0.7-1.1 s,
-    # the two on a thread each; with ``select_gmm_above`` gmm only where the hybrid doubts)
+    # sky probability (4x faster than gmm, not trained on renders); "hybrid": the network's boundary
+    # seeds per-photo mixtures (0.3 s); "select": hybrid and gmm both, and where they part, the one
+    # more confident on the disputed columns (:func:`select_skylines`; best on unseen real photos, 0.4 s a
+    # 1024-wide photo, the two on a thread each; with ``select_gmm_above`` gmm only where the hybrid doubts)
     method: str = "gmm"
     jump_cost: float = 0.25  # per pixel of boundary jump between columns
     jump_cap: float = 12.0  # no jump costs more than this (vertical edges)
@@ -98,10 +98,11 @@ class SkylineParams:
     select_tol_px: float = 5.0
     # "select": gmm runs only where more than this share of the hybrid's columns have confidence below 0.5, the
     # hybrid's skyline kept as it is on the others; 0: gmm always (the default). An option for speed: at 0.02 gmm
-    # runs on a third of the photos and select takes 0.38 s a photo (median) instead of 0.72 s; chosen on the dev
+    # runs on a third of the photos and select took 0.38 s a photo (median) instead of 0.72 s (before session 31's
+    # same-values speed-ups, experiments/photos/same-values-faster/); chosen on the dev
     # and training photos (target met on 24 / 58 against 23 / 59), but on the validation side 46 of 80 photos meet
     # the target against 48, and one CH1 right answer loses its confidence (experiments/photos/select-gate/).
-    # A localization takes 12-30 s: the 0.35 s is not worth it there.
+    # A localization takes 12-30 s: the fraction of a second is not worth it there.
     select_gmm_above: float = 0.0
     # gmm: the colour edge counts at a boundary only as far as P(sky) changes across it (|mean over the 2 rows above
     # - the 2 below| times this, at most 1; 0: edges count wherever they are). Off by default: it stops a faint edge
