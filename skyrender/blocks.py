@@ -99,7 +99,8 @@ def concurrently(*calls: Callable[[], T]) -> list[T]:
 class Once:
     """A value made by ``make()`` (no arguments) on its first request, by whichever thread asks first; a thread
     asking while it is being made waits for it. For work two concurrent lines both need, the one that needs it first
-    paying for it (the photo extractor's colour edges and texture cost)."""
+    paying for it (the photo extractor's colour edges, texture cost and mixture inputs:
+    :class:`skyrender.features.skyline.PhotoWork`)."""
 
     def __init__(self, make: Callable[[], T]):
         self._make = make

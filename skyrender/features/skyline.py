@@ -348,11 +348,12 @@ class PhotoWork:
         """The work on ``features`` (H, W, 5); ``edges`` already made (or a :class:`Once`), None: made on request."""
         from .sky import blue_sky_logit, mixture_inputs
 
-        return cls(edges if isinstance(edges, Once) else
-                   Once(lambda: _edge_strength(features, params.edge_percentile)) if edges is None else Once(lambda: edges),
-                   Once(lambda: _texture_cost(features, params.texture_weight)),
-                   Once(lambda: mixture_inputs(features, dtype=np.float32)),
-                   Once(lambda: blue_sky_logit(features)))
+        if edges is None:
+            edges = Once(lambda: _edge_strength(features, params.edge_percentile))
+        elif not isinstance(edges, Once):
+            edges = Once(lambda given=edges: given)
+        return cls(edges, Once(lambda: _texture_cost(features, params.texture_weight)),
+                   Once(lambda: mixture_inputs(features, dtype=np.float32)), Once(lambda: blue_sky_logit(features)))
 
 
 def _extract(image: np.ndarray, features: np.ndarray, edges: np.ndarray | Once | None, method: str,
