@@ -490,12 +490,14 @@ def _gmm_probability(features: np.ndarray, work: PhotoWork, params: SkylineParam
     draft = np.ascontiguousarray(features[::s, ::s])  # once, rather than a copy in each use of a strided view
     texture = work.texture()
     tol, samples = params.mixture_budget()
+    draft_edges = None  # the draft's colour edges: the same in every round
     for round_ in range(params.rounds - 1):
         full = {} if s > 1 else {"pixel_rows": work.pixel_rows, "blue_logit": work.blue_logit}
         p = sky_probability(draft, sky_mask[::s, ::s], terrain_mask[::s, ::s], _row_prior(draft.shape[0]),
                             components=params.components, seed=round_, tol=tol,
                             max_samples=params.draft_samples if s > 1 else samples, **full)
-        draft_edges = _edge_strength(draft, params.edge_percentile) if s > 1 else work.edges()
+        if draft_edges is None:
+            draft_edges = _edge_strength(draft, params.edge_percentile) if s > 1 else work.edges()
         rows = _boundary(p, _edges_where_p_changes(draft_edges, p, params.edge_contrast), params.edge_bonus,
                          params.jump_cost / s,
                          params.jump_cap, None if texture is None else texture[::s, ::s])
