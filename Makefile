@@ -15,9 +15,10 @@ $(STAMP): pyproject.toml scripts/install-system-deps.sh
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e '.[dev]'
-	# the compiled kernels (the alignment, the boundary search) into numba's cache, once
+	# the compiled kernels (the alignment, the boundary search, the k-means step) into numba's cache, once
 	$(BIN)/python -m skyrender.localizer.alignment_kernel
 	$(BIN)/python -m skyrender.features.boundary_kernel
+	$(BIN)/python -m skyrender.features.kmeans_kernel
 	touch $(STAMP)
 
 demo: install

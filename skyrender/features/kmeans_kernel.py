@@ -32,3 +32,14 @@ def assign_and_sum(cross, norms, x):
         for d in range(D):
             sums[nearest, d] += x[i, d]
     return labels, sums, counts
+
+
+def compile_now() -> None:
+    """Compile :func:`assign_and_sum` for the argument types :func:`~skyrender.features.kmeans.kmeans_labels` passes
+    it, into numba's on-disk cache (``make install`` runs ``python -m skyrender.features.kmeans_kernel``)."""
+    x = np.arange(6.0).reshape(3, 2)
+    assign_and_sum(x @ x[:2].T, np.einsum("ij,ij->i", x[:2], x[:2]), x)
+
+
+if __name__ == "__main__":
+    compile_now()
