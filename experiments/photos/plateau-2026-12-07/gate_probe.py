@@ -1,18 +1,26 @@
 """select with hazy_ridge_logit's 'brighter than the field' gate at 4 L (shipped) and wider, training side only."""
-import sys, numpy as np, json
+import json
+import sys
+
+import numpy as np
+
 import skyrender.features.sky as sky
 from skyrender.benchmarks.skyline_photos import column_errors
 from skyrender.datasets.real_photos import items_on_side
 from skyrender.features import SkylineParams, extract_skyline, load_photo
+
 orig = sky.hazy_ridge_logit
 def gated(limit):
     def f(features, field, sigma, weight=20.0, blue_weight=None):
         greyer = features[..., 2] - field[..., 2]
-        greyer -= max(8.0, 3.0 * sigma); greyer /= 6.0
+        greyer -= max(8.0, 3.0 * sigma)
+        greyer /= 6.0
         nb = features[..., 0] - field[..., 0]
-        np.subtract(limit, nb, out=nb); nb /= limit
+        np.subtract(limit, nb, out=nb)
+        nb /= limit
         pen = (sky.blue_field_weight(field) if blue_weight is None else blue_weight) * weight
-        pen *= np.clip(greyer, 0, 1, out=greyer); pen *= np.clip(nb, 0, 1, out=nb)
+        pen *= np.clip(greyer, 0, 1, out=greyer)
+        pen *= np.clip(nb, 0, 1, out=nb)
         return pen
     return f
 P = SkylineParams(method="select")
