@@ -782,8 +782,8 @@ def test_select_takes_the_mixtures_where_the_network_follows_a_cable(seed, built
 
 
 def test_the_network_run_beside_the_features_gives_the_hybrid_it_would_compute_itself(builtin_view):
-    """``extract_skyline`` runs the sky network on a thread beside the pixel features and colour edges and
-    hands its probability to the hybrid: the skyline and confidence are those of the hybrid computing the
+    """``extract_skyline`` runs the sky network on a thread beside the pixel features and hands its
+    probability to the hybrid: the skyline and confidence are those of the hybrid computing the
     network itself after them, to the bit."""
     from skyrender.features import SkylineParams
     from skyrender.features import skyline as extraction
@@ -793,9 +793,9 @@ def test_the_network_run_beside_the_features_gives_the_hybrid_it_would_compute_i
     params = SkylineParams(method="hybrid")
     beside = extract_skyline(image, params)
     cleaned, _ = extraction.remove_cables(image, params.cables)
-    features, edges = extraction._features_and_edges(cleaned, params)
+    features = extraction.pixel_features(cleaned)
     p_net = extraction.net_probability(cleaned, params.net_weights, net_width=params.net_width)
-    itself = extraction._extract(cleaned, features, edges, "hybrid", params, p_net)
+    itself = extraction._extract(cleaned, features, "hybrid", params, p_net)
     np.testing.assert_array_equal(beside.skyline, itself.skyline)
     np.testing.assert_array_equal(beside.confidence, itself.confidence)
     with pytest.raises(ValueError, match="unknown skyline method"):
@@ -816,9 +816,9 @@ def test_select_runs_the_mixtures_only_where_the_hybrid_doubts(builtin_view, mon
     ran = []
     original = extraction._extract
 
-    def counting(image, features, edges, method, params, p_net=None, work=None):
+    def counting(image, features, method, params, p_net=None, work=None):
         ran.append(method)
-        return original(image, features, edges, method, params, p_net, work)
+        return original(image, features, method, params, p_net, work)
 
     monkeypatch.setattr(extraction, "_extract", counting)
     hybrid = extract_skyline(image, SkylineParams(method="hybrid", **_select_budget()))
@@ -955,10 +955,10 @@ def test_select_with_its_lines_sharing_work_is_the_two_lines_run_apart(builtin_v
     params = SkylineParams(method="select")
     shared = extract_skyline(image, params)
     cleaned, _ = extraction.remove_cables(image, params.cables)
-    features, edges = extraction._features_and_edges(cleaned, params)
+    features = extraction.pixel_features(cleaned)
     p_net = extraction.net_probability(cleaned, params.net_weights, net_width=params.net_width)
-    apart = extraction.select_skylines(extraction._extract(cleaned, features, edges, "hybrid", params, p_net),
-                                       extraction._extract(cleaned, features, edges, "gmm", params),
+    apart = extraction.select_skylines(extraction._extract(cleaned, features, "hybrid", params, p_net),
+                                       extraction._extract(cleaned, features, "gmm", params),
                                        params.select_tol_px)
     np.testing.assert_array_equal(shared.skyline, apart.skyline)
     np.testing.assert_array_equal(shared.confidence, apart.confidence)

@@ -310,25 +310,19 @@ def extract_skyline(image: np.ndarray, params: SkylineParams = SkylineParams()) 
     if params.method == "select":
         if params.select_gmm_above > 0:
             # the hybrid first, on both cores; gmm only where the hybrid doubts more than a few columns
-            hybrid = _extract(image, features, None, "hybrid", params, p_net, work)
+            hybrid = _extract(image, features, "hybrid", params, p_net, work)
             if not hybrid_in_doubt(hybrid, params.select_gmm_above):
                 return hybrid
-            gmm = _extract(image, features, None, "gmm", params, work=work)
+            gmm = _extract(image, features, "gmm", params, work=work)
             return select_skylines(hybrid, gmm, params.select_tol_px)
         # the two extractors on a thread each (1.43 -> 1.19 s a CH1 photo on 2 cores, the same skylines to the bit);
         # BLAS and OpenMP held to one thread around both, so that neither's own limits, set and restored inside,
         # can widen them under the other
         with one_thread():
-            hybrid, gmm = concurrently(lambda: _extract(image, features, None, "hybrid", params, p_net, work),
-                                       lambda: _extract(image, features, None, "gmm", params, work=work))
+            hybrid, gmm = concurrently(lambda: _extract(image, features, "hybrid", params, p_net, work),
+                                       lambda: _extract(image, features, "gmm", params, work=work))
         return select_skylines(hybrid, gmm, params.select_tol_px)
-    return _extract(image, features, None, params.method, params, p_net, work)
-
-
-def _features_and_edges(image: np.ndarray, params: SkylineParams) -> tuple[np.ndarray, np.ndarray]:
-    """The photo's :func:`~.sky.pixel_features` (H, W, 5) and :func:`_edge_strength` (H+1, W)."""
-    features = pixel_features(image)
-    return features, _edge_strength(features, params.edge_percentile)
+    return _extract(image, features, params.method, params, p_net, work)
 
 
 @dataclass(frozen=True)
@@ -344,28 +338,24 @@ class PhotoWork:
     blue_logit: Once
 
     @classmethod
-    def of(cls, features: np.ndarray, params: SkylineParams, edges: np.ndarray | Once | None = None) -> PhotoWork:
-        """The work on ``features`` (H, W, 5); ``edges`` already made (or a :class:`Once`), None: made on request."""
+    def of(cls, features: np.ndarray, params: SkylineParams) -> PhotoWork:
+        """The work on ``features`` (H, W, 5), nothing made yet."""
         from .sky import blue_sky_logit, mixture_inputs
 
-        if edges is None:
-            edges = Once(lambda: _edge_strength(features, params.edge_percentile))
-        elif not isinstance(edges, Once):
-            edges = Once(lambda given=edges: given)
-        return cls(edges, Once(lambda: _texture_cost(features, params.texture_weight)),
+        return cls(Once(lambda: _edge_strength(features, params.edge_percentile)),
+                   Once(lambda: _texture_cost(features, params.texture_weight)),
                    Once(lambda: mixture_inputs(features, dtype=np.float32)), Once(lambda: blue_sky_logit(features)))
 
 
-def _extract(image: np.ndarray, features: np.ndarray, edges: np.ndarray | Once | None, method: str,
-             params: SkylineParams, p_net: np.ndarray | None = None, work: PhotoWork | None = None,
-             ) -> ExtractedSkyline:
-    """One extractor (``method``: gmm, net or hybrid) on a photo whose cables are painted over,
-    its :func:`~.sky.pixel_features` and :func:`_edge_strength` given (or ``work``, where other extractors of the photo
-    share it: then ``edges`` is not looked at), and for net and hybrid the network's :func:`net_probability` ``p_net``
-    (:func:`extract_skyline` runs it beside the features)."""
+def _extract(image: np.ndarray, features: np.ndarray, method: str, params: SkylineParams,
+             p_net: np.ndarray | None = None, work: PhotoWork | None = None) -> ExtractedSkyline:
+    """One extractor (``method``: gmm, net or hybrid) on a photo whose cables are painted over, its
+    :func:`~.sky.pixel_features` given, and for net and hybrid the network's :func:`net_probability` ``p_net``
+    (:func:`extract_skyline` runs it beside the features); ``work``: the :class:`PhotoWork` other extractors of the
+    photo share, None: this one's own."""
     H = image.shape[0]
     if work is None:
-        work = PhotoWork.of(features, params, edges)
+        work = PhotoWork.of(features, params)
     if method == "gmm":
         p = _gmm_probability(features, work, params)
         rows = _boundary(p, _edges_where_p_changes(work.edges(), p, params.edge_contrast), params.edge_bonus,
@@ -421,7 +411,7 @@ def _net_boundary_weights(params: SkylineParams) -> tuple[float, float, float]:
 
 
 def _hybrid_probability(features: np.ndarray, p_net: np.ndarray, rows: np.ndarray, params: SkylineParams,
-                        work: PhotoWork | None = None) -> np.ndarray:
+                        work: PhotoWork) -> np.ndarray:
     """P(sky) of ``method="hybrid"``: the network finds the boundary (it does not lose the
     sky to a bad first guess, as per-photo mixtures can), then colour-texture mixtures are
     fitted to *this* photo's pixels on either side of it, ``params.band`` px clear, and
@@ -436,8 +426,8 @@ def _hybrid_probability(features: np.ndarray, p_net: np.ndarray, rows: np.ndarra
     terrain = (v >= rows[None, :] + params.band) & (p_net < 0.5)
     tol, samples = params.mixture_budget()
     p_colour = sky_probability(features, sky, terrain, _row_prior(H), components=params.components,
-                               max_samples=samples, tol=tol, seed=0, pixel_rows=work and work.pixel_rows,
-                               blue_logit=work and work.blue_logit)
+                               max_samples=samples, tol=tol, seed=0, pixel_rows=work.pixel_rows,
+                               blue_logit=work.blue_logit)
     logit = _logit(p_net)
     logit *= HYBRID_NET_WEIGHT
     logit += _logit(p_colour)
@@ -491,8 +481,8 @@ def _gmm_probability(features: np.ndarray, work: PhotoWork, params: SkylineParam
     texture = work.texture()
     tol, samples = params.mixture_budget()
     draft_edges = None  # the draft's colour edges: the same in every round
+    full = {} if s > 1 else {"pixel_rows": work.pixel_rows, "blue_logit": work.blue_logit}  # no draft: the photo's own
     for round_ in range(params.rounds - 1):
-        full = {} if s > 1 else {"pixel_rows": work.pixel_rows, "blue_logit": work.blue_logit}
         p = sky_probability(draft, sky_mask[::s, ::s], terrain_mask[::s, ::s], _row_prior(draft.shape[0]),
                             components=params.components, seed=round_, tol=tol,
                             max_samples=params.draft_samples if s > 1 else samples, **full)
