@@ -251,6 +251,11 @@ def localize(
     geojson: Optional[Path] = typer.Option(None, "--geojson", help="write the camera position and view cone"),
     candidates: int = typer.Option(0, "--candidates", help="also list the N best distinct places refined, the answer's "
                                    "(given or withheld) first: where to look when it abstains or doubts"),
+    skyline_file: Optional[Path] = typer.Option(None, "--skyline", help="the photo's skyline as you give it, instead of "
+                                                "the extracted one: .npy or .json as 'skyrender skyline --out' writes "
+                                                "it (corrected by hand, say)"),
+    sky_mask: Optional[Path] = typer.Option(None, "--sky-mask", help="a mask of the photo's size, white where it shows "
+                                            "sky: its skyline instead of the extracted one"),
     stats: bool = typer.Option(False, "--stats", help="print per-stage times and hypothesis counts (stderr)"),
     prior_peak: Optional[list[int]] = typer.Option(None, "--prior-peak", help="id of a model peak known to be in view"),
     prior_near: Optional[str] = typer.Option(None, "--prior-near", help="X,Y,RADIUS: a peak within RADIUS m is in view"),
@@ -268,10 +273,12 @@ def localize(
 
     Exit status 0: localized; 3: abstained (no pose it would stand behind). With ``--candidates N``
     the best N distinct places it refined are listed too (``"candidates"`` in ``--json``, points in
-    ``--geojson``), abstaining or not: only the first, the answer's, has a confidence."""
+    ``--geojson``), abstaining or not: only the first, the answer's, has a confidence. With ``--skyline`` or
+    ``--sky-mask`` the photo's skyline is yours, not extracted (every column trusted; the photo preset's confidence
+    then is the one fitted for such skylines)."""
     from dataclasses import replace
 
-    from .features import load_photo
+    from .features import given_skyline, load_photo
     from .features.photo_io import exif_fov, is_camera_photo
     from .io import camera_geojson, write_json
     from .localizer import LocalizeParams
@@ -293,8 +300,12 @@ def localize(
             _check_writable(path, option, kinds)
     if preset not in ("auto", "photo", "render"):
         raise InputError(f"--preset must be auto, photo or render, got {preset!r}")
+    if skyline_file is not None and sky_mask is not None:
+        raise InputError("give at most one of --skyline and --sky-mask")
     prior = _parse_prior(prior_peak, prior_near)
     photo = load_photo(image)
+    given = (None if skyline_file is None and sky_mask is None else
+             given_skyline(photo.shape[1], photo.shape[0], skyline_file, sky_mask))
     from_exif = exif_fov(str(image)) if fov is None else None
     if preset == "auto":
         preset = "photo" if is_camera_photo(str(image)) else "render"
@@ -306,8 +317,10 @@ def localize(
     # an EXIF fov is used as a given one: the mode the photo confidence is fitted and measured for (CH1's given focal
     # lengths are as rough: ~4 % short at one place); refitting it let wrong places fit it too (experiments/ch1/exif-fov/)
     params = replace(base, ordered=not unordered)
+    if given is not None:
+        params = params.for_given_skyline()
     fov = fov if from_exif is None else from_exif
-    result = run_localize(photo, the_model, height, fov, prior, terrain=terrain, params=params,
+    result = run_localize(photo, the_model, height, fov, prior, terrain=terrain, skyline=given, params=params,
                           curvature=not flat_earth)
     places = result.places(candidates, params.places_apart_m, the_model.dem)
     if overlay is not None:

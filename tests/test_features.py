@@ -1002,3 +1002,17 @@ def test_row_prefix_sums_are_numpys_cumsum_down_the_rows_to_the_bit():
                 got = row_prefix_sums(a, acc)
                 assert got.dtype == np.float64
                 np.testing.assert_array_equal(got, want)
+
+
+def test_a_terrain_masks_skyline_is_the_top_edge_of_each_columns_first_terrain_pixel():
+    """skyline_of_terrain (CONTRACT.md, *Skyline*): the topmost change where a column changes more than once, NaN
+    for a column of sky only, 0 where terrain reaches the top edge; the CH1 masks' truth (terrain white) is it."""
+    from skyrender.features import skyline_of_terrain
+
+    terrain = np.zeros((6, 4), bool)
+    terrain[3:, 0] = True  # one change
+    terrain[1, 2] = terrain[4:, 2] = True  # a cable or branch above the ridge: the topmost change
+    terrain[:, 3] = True  # terrain to the top edge
+    np.testing.assert_array_equal(skyline_of_terrain(terrain), [3.0, np.nan, 1.0, 0.0])
+    np.testing.assert_array_equal(truth_from_mask(np.where(terrain, 255, 0).astype(np.uint8)),
+                                  skyline_of_terrain(terrain))

@@ -592,6 +592,61 @@ def test_cli_localize_abstains_with_exit_3(model_dir, tmp_path, capsys):
     assert code == 3 and out.startswith("abstained:") and "--fov" not in out
 
 
+def test_cli_localize_from_a_skyline_or_sky_mask_you_give(scene, views, model_dir, tmp_path, capsys):
+    """``localize --skyline FILE`` (.json or .npy, CONTRACT.md's skyline) and ``--sky-mask IMAGE`` (white = sky):
+    the photo's skyline is the one given, not the extracted one. A photo of one flat grey shows no skyline to
+    extract, so it abstains alone; with the view's rendered skyline given as a file or painted as a mask it is
+    localized where the view was taken."""
+    from skyrender.io import save_skyline
+    from skyrender.render import render_skylines
+    from skyrender.viz import write_image
+
+    _, terrain, _ = scene
+    pose = views.poses[2]
+    sky = render_skylines(terrain, pose, K)
+    write_image(tmp_path / "grey.png", np.full((K.height, K.width, 3), 128, np.uint8))
+    common = ["--model", model_dir, "--height", 2, "--fov", 60, "--json"]
+    code, out, err = _run(capsys, ["localize", tmp_path / "grey.png", *common])
+    assert code == 3 and json.loads(out)["status"] == "abstained"
+    save_skyline(tmp_path / "sky.json", sky)
+    save_skyline(tmp_path / "sky.npy", sky)
+    rows = np.arange(K.height)[:, None]
+    mask = np.where(rows < np.nan_to_num(sky, nan=K.height)[None, :], 255, 0).astype(np.uint8)
+    write_image(tmp_path / "mask.png", np.repeat(mask[..., None], 3, axis=2))
+    for given in (["--skyline", tmp_path / "sky.json"], ["--skyline", tmp_path / "sky.npy"],
+                  ["--sky-mask", tmp_path / "mask.png"]):
+        code, out, err = _run(capsys, ["localize", tmp_path / "grey.png", *common, *given])
+        assert code == 0, (given, err)
+        doc = json.loads(out)
+        assert np.hypot(doc["x"] - pose.x, doc["y"] - pose.y) < POS_TOL_M, given
+
+
+@pytest.mark.parametrize("case", ["both_given", "short_skyline", "skyline_out_of_frame", "all_sky_skyline",
+                                  "mask_size", "mask_without_sky", "mask_missing"])
+def test_cli_localize_a_given_skyline_that_does_not_fit_is_one_line_and_exit_2(case, model_dir, tmp_path, capsys):
+    from skyrender.io import save_skyline
+    from skyrender.viz import write_image
+
+    img = tmp_path / "p.png"
+    write_image(img, np.full((60, 80, 3), 128, np.uint8))
+    save_skyline(tmp_path / "ok.json", np.full(80, 30.0))
+    save_skyline(tmp_path / "short.json", np.full(79, 30.0))
+    save_skyline(tmp_path / "out.npy", np.r_[np.full(79, 30.0), 61.0])
+    save_skyline(tmp_path / "nan.json", np.full(80, np.nan))
+    write_image(tmp_path / "small.png", np.full((30, 40, 3), 255, np.uint8))
+    write_image(tmp_path / "black.png", np.zeros((60, 80, 3), np.uint8))
+    given = {"both_given": ["--skyline", tmp_path / "ok.json", "--sky-mask", tmp_path / "small.png"],
+             "short_skyline": ["--skyline", tmp_path / "short.json"],
+             "skyline_out_of_frame": ["--skyline", tmp_path / "out.npy"],
+             "all_sky_skyline": ["--skyline", tmp_path / "nan.json"],
+             "mask_size": ["--sky-mask", tmp_path / "small.png"],
+             "mask_without_sky": ["--sky-mask", tmp_path / "black.png"],
+             "mask_missing": ["--sky-mask", tmp_path / "none.png"]}[case]
+    code, out, err = _run(capsys, ["localize", img, "--model", model_dir, "--height", 2, "--fov", 60, *given])
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and err.startswith("skyrender: error:")
+
+
 @pytest.mark.parametrize("case", ["no_model", "both", "negative_height", "bad_fov", "missing_image", "bad_prior",
                                   "not_a_model", "bad_preset"])
 def test_cli_localize_bad_input_is_one_line_and_exit_2(case, model_dir, tmp_path, capsys):

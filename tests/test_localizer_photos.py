@@ -101,6 +101,22 @@ def test_photo_confidence_is_a_logistic_of_the_margin_to_the_runner_up():
     assert photo.confidence_model == "margin" and photo.runner_up_m >= 1000.0 and photo.horizon.terms == 2
 
 
+def test_a_given_skyline_takes_the_confidence_fitted_for_given_skylines():
+    """``for_given_skyline`` (``localize --skyline / --sky-mask``, ``bench-real --true-skyline``): the photo preset's
+    margin logistic and threshold become those fitted on skylines given that way, with the fov unknown never below the
+    extracted skyline's threshold, and no second opinion (fitted on extracted skylines); the render preset, whose
+    confidence is the agreement, is unchanged."""
+    from skyrender.localizer.confidence import GIVEN_SKYLINE_MARGIN_LOGIT, GIVEN_SKYLINE_MIN_CONFIDENCE
+
+    photo = LocalizeParams.for_photos()
+    given = photo.for_given_skyline()
+    assert given.margin_logit == GIVEN_SKYLINE_MARGIN_LOGIT and given.min_confidence == GIVEN_SKYLINE_MIN_CONFIDENCE
+    assert given.abstain_below(fov_unknown=True) >= max(GIVEN_SKYLINE_MIN_CONFIDENCE, photo.abstain_below(True))
+    assert given.second_opinion_from == np.inf and photo.second_opinion_from < np.inf
+    assert given.horizon == photo.horizon and given.skyline_method == photo.skyline_method  # the search as before
+    assert LocalizeParams().for_given_skyline() == LocalizeParams()
+
+
 
 def test_the_part_margin_finds_a_look_alike_that_wins_on_one_part_only():
     """part_margins: the first rendered skyline's margin over the others on each part; an answer that

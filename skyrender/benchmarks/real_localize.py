@@ -590,6 +590,8 @@ def main(argv=None) -> int:
     from ..localizer import LocalizeParams
 
     params = LocalizeParams.for_photos()
+    if args.true_skyline:  # a skyline given, not extracted: the confidence fitted for such skylines
+        params = params.for_given_skyline()
     if args.set:
         try:
             params = LocalizeParams.from_dict(json.loads(args.set), params)

@@ -77,6 +77,7 @@ def embree_full_image_skyline(caster, terrain, pose, intrinsics):
     """Peer baseline 1: an embreex full-image ray cast (one ray per pixel centre), the
     first terrain row per column (what a one-sample full render gives)."""
     from ..camera import pixel_ray_basis
+    from ..features.skyline import skyline_of_terrain
 
     W, H = intrinsics.width, intrinsics.height
     u, v = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
@@ -85,9 +86,7 @@ def embree_full_image_skyline(caster, terrain, pose, intrinsics):
     o, (dirs,) = terrain.to_mesh_space(pose.array()[:3], (dirs.reshape(-1, 3),))
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
     hit = caster.intersects_any(np.broadcast_to(o, dirs.shape), dirs).reshape(H, W)
-    rows = np.argmax(hit, axis=0).astype(float)
-    rows[~hit.any(axis=0)] = np.nan
-    return rows
+    return skyline_of_terrain(hit)
 
 
 def embree_bisected_skyline(caster, terrain, pose, intrinsics, tol: float = 0.05):

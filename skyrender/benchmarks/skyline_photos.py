@@ -70,14 +70,13 @@ def otsu_baseline(image: np.ndarray) -> np.ndarray:
     """Baseline: Otsu threshold on brightness + blueness; first non-sky row per column."""
     import cv2
 
+    from ..features.skyline import skyline_of_terrain
+
     rgb = image.astype(np.float32)
     skyness = 0.5 * rgb.mean(axis=2) + 0.5 * (rgb[..., 2] - rgb[..., 0]) + 128
     skyness = np.clip(skyness, 0, 255).astype(np.uint8)
     _, sky = cv2.threshold(cv2.GaussianBlur(skyness, (5, 5), 0), 0, 1, cv2.THRESH_BINARY + cv2.THRESH_OTSU)
-    ground = sky == 0
-    v = np.argmax(ground, axis=0).astype(float)
-    v[~ground.any(axis=0)] = np.nan
-    return v
+    return skyline_of_terrain(sky == 0)
 
 
 def meets_target(median: float, within5: float) -> bool:

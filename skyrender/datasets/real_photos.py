@@ -29,6 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..features.skyline import skyline_of_terrain
+
 REPO = os.path.normpath(os.path.join(os.path.dirname(__file__), "..", ".."))
 DEFAULT_PHOTOS = os.path.normpath(os.path.join(REPO, "..", "shared", "data", "photos"))
 SPLIT_FILE = os.path.join(REPO, "experiments", "photos", "split.json")
@@ -83,11 +85,8 @@ def truth_from_red_line(gt_rgb: np.ndarray) -> np.ndarray:
 
 
 def truth_from_mask(mask: np.ndarray) -> np.ndarray:
-    """Top edge of the first terrain (white) pixel per column; NaN where none."""
-    terrain = mask > 127
-    v = np.argmax(terrain, axis=0).astype(float)
-    v[~terrain.any(axis=0)] = np.nan
-    return v
+    """Top edge of the first terrain (white: CH1 and GeoPose3K masks) pixel per column; NaN where none."""
+    return skyline_of_terrain(mask > 127)
 
 
 def photo_items(data_dir: str = DEFAULT_PHOTOS) -> list[PhotoItem]:

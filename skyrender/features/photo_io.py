@@ -133,6 +133,39 @@ def exif_fov(path: str) -> float | None:
     return horizontal_fov(w, f_px)
 
 
+def given_skyline(width: int, height: int, skyline_path=None, sky_mask_path=None) -> np.ndarray:
+    """The skyline (W,) float64 of a ``width`` x ``height`` (upright) photo as a person gives it, in place of the
+    extracted one: a skyline file (``skyline_path``; CONTRACT.md, *Skyline*: ``.npy`` float64 or a JSON list with
+    null for NaN, as ``skyrender skyline --out`` writes it, perhaps corrected by hand) or a sky mask
+    (``sky_mask_path``: an image of the photo's size, EXIF orientation applied, white = sky: grey level above 127).
+    Baatz et al.'s CH1 results used skylines "either automatic or easily supported by an operator for challenging
+    pictures"; this is that operator's way in. InputError names what does not fit the photo."""
+    from ..io import load_skyline
+    from .skyline import skyline_of_terrain
+
+    if (skyline_path is None) == (sky_mask_path is None):
+        raise InputError("give one of a skyline file and a sky mask")
+    if sky_mask_path is not None:
+        mask = load_photo(sky_mask_path)
+        if mask.shape[:2] != (height, width):
+            raise InputError(f"{os.fspath(sky_mask_path)}: the sky mask is {mask.shape[1]} x {mask.shape[0]} px, "
+                             f"the photo {width} x {height} (upright)")
+        sky = mask.mean(axis=2) > 127.0
+        if not sky.any():
+            raise InputError(f"{os.fspath(sky_mask_path)}: the sky mask marks no sky (white pixels)")
+        return skyline_of_terrain(~sky)
+    sky = load_skyline(skyline_path)
+    if sky.shape != (width,):
+        raise InputError(f"{os.fspath(skyline_path)}: the skyline has {sky.size} values, the photo {width} columns "
+                         "(upright)")
+    if np.isinf(sky).any() or (sky < 0).any() or (sky > height).any():
+        raise InputError(f"{os.fspath(skyline_path)}: skyline values must lie in [0, {height}] (the photo's rows) "
+                         "or be NaN (null)")
+    if np.isnan(sky).all():
+        raise InputError(f"{os.fspath(skyline_path)}: the skyline is all sky (NaN): nothing to localize from")
+    return sky
+
+
 def as_rgb8(image: np.ndarray, name: str = "image", bgr: bool = False) -> np.ndarray:
     """Normalise an array image to (H, W, 3) RGB uint8 (``bgr``: channel order as OpenCV reads)."""
     image = np.asarray(image)

@@ -459,6 +459,16 @@ def net_probability(image: np.ndarray, weights: str | None = None, net_width: in
     return (1.0 / (1.0 + np.exp(-np.clip(logits, -30, 30)))).astype(np.float32)
 
 
+def skyline_of_terrain(terrain: np.ndarray) -> np.ndarray:
+    """Skyline (W,) of a terrain mask (H, W), True (or non-zero) = terrain: per column the v of the top edge of its
+    first terrain pixel (px; the topmost change where a column changes more than once), NaN where the column is all
+    sky, 0 where terrain reaches the top edge (CONTRACT.md, *Skyline*)."""
+    terrain = np.asarray(terrain, bool)
+    v = np.argmax(terrain, axis=0).astype(np.float64)
+    v[~terrain.any(axis=0)] = np.nan
+    return v
+
+
 def boundary_skyline(rows: np.ndarray, sub: np.ndarray, H: int) -> np.ndarray:
     """Skyline (W,) from integer boundary rows and their sub-pixel refinement: NaN where a
     column is all sky (row H), 0 where terrain reaches the top edge."""

@@ -29,9 +29,16 @@ from .verification import ScoreParams, part_margins
 PHOTO_CONFIDENCE_FILE = os.path.join(os.path.dirname(__file__), "photo_confidence.json")
 
 
-def _photo_confidence_fit() -> dict:
+#: The same confidence for a skyline a person gives instead of the extracted one (``localize --skyline`` or
+#: ``--sky-mask``, :func:`~skyrender.features.given_skyline`; ``bench-real --true-skyline``): every column is trusted
+#: and none is an extraction error, so the refined scores, and the margins between them, run on another scale. Fitted
+#: the same way (``localize_fit --from-rows``) on the CH1 training side localized from its masks' skylines.
+GIVEN_SKYLINE_CONFIDENCE_FILE = os.path.join(os.path.dirname(__file__), "given_skyline_confidence.json")
+
+
+def _photo_confidence_fit(path: str = PHOTO_CONFIDENCE_FILE) -> dict:
     try:
-        with open(PHOTO_CONFIDENCE_FILE) as f:
+        with open(path) as f:
             return json.load(f)
     except (OSError, ValueError):
         return {}  # not fitted yet
@@ -62,6 +69,10 @@ PHOTO_RUNNER_UP_M = float(_FIT.get("runner_up_m", 1000.0))
 #: (:func:`.pipeline._second_opinion`; fitted by ``localize_fit``; inf: no second opinion).
 PHOTO_SECOND_OPINION_FROM = float((_FIT.get("second_opinion") or {}).get("from", math.inf))
 PHOTO_SECOND_OPINION_GAIN = float((_FIT.get("second_opinion") or {}).get("gain", 0.0))
+_GIVEN_FIT = _photo_confidence_fit(GIVEN_SKYLINE_CONFIDENCE_FILE) or _FIT  # the extracted skyline's until fitted
+#: The photo confidence's logistic and threshold for a given skyline (:data:`GIVEN_SKYLINE_CONFIDENCE_FILE`).
+GIVEN_SKYLINE_MARGIN_LOGIT = _photo_margin_logit(_GIVEN_FIT)
+GIVEN_SKYLINE_MIN_CONFIDENCE = float(_GIVEN_FIT.get("min_confidence", PHOTO_MIN_CONFIDENCE))
 
 
 def confidence_of(best: Refined, runner_up: Refined | None) -> float:

@@ -6,12 +6,14 @@ constants the photo preset is made of. :func:`.pipeline.localize` reads them sta
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from ..config import params_from_dict, params_to_dict
 from ..errors import InputError
 from ..features.skyline import SkylineParams
 from .confidence import (
+    GIVEN_SKYLINE_MARGIN_LOGIT,
+    GIVEN_SKYLINE_MIN_CONFIDENCE,
     PHOTO_MARGIN_LOGIT,
     PHOTO_MIN_CONFIDENCE,
     PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN,
@@ -240,6 +242,18 @@ class LocalizeParams:
                    rerank_fov_unknown=True, horizon_rerank_fov_unknown=300, other_fov_refinements=2,
                    search_width=int(SCORE_REFERENCE_WIDTH_PX),
                    horizon=HorizonSearchParams(tilts=(-10.0, 0.0, 10.0, 20.0, 30.0), terms=2, rank_by_cost=True))
+
+    def for_given_skyline(self) -> "LocalizeParams":
+        """These parameters for a skyline a person gives (:func:`~skyrender.features.given_skyline`: every column
+        trusted) instead of one extracted: with the photo confidence (``"margin"``) its fit on given skylines
+        (:data:`.confidence.GIVEN_SKYLINE_MARGIN_LOGIT`) and that fit's threshold, with the fov unknown never below
+        the extracted skyline's threshold there (no fov-unknown localizations from given skylines were fitted), and no
+        second opinion (fitted on extracted skylines only). With another confidence model, unchanged."""
+        if self.confidence_model != "margin":
+            return self
+        unknown = max(GIVEN_SKYLINE_MIN_CONFIDENCE, self.abstain_below(fov_unknown=True))
+        return replace(self, margin_logit=GIVEN_SKYLINE_MARGIN_LOGIT, min_confidence=GIVEN_SKYLINE_MIN_CONFIDENCE,
+                       min_confidence_fov_unknown=unknown, second_opinion_from=math.inf)
 
     def skyline_params(self) -> SkylineParams:
         """The skyline extractor's parameters this localization extracts with."""
