@@ -623,10 +623,13 @@ def main(argv=None) -> int:
             print(f"--retable: no finished run {name}.json in {args.out}: {exc}")
             return 2
         if args.rescore:
-            from ..localizer.confidence import PHOTO_CONFIDENCE_FILE, uses_part_margin
+            from ..localizer.confidence import GIVEN_SKYLINE_CONFIDENCE_FILE, PHOTO_CONFIDENCE_FILE, uses_part_margin
 
+            # a run from the masks' skylines is rescored with the confidence fitted for given skylines
+            shipped = (GIVEN_SKYLINE_CONFIDENCE_FILE if (report.get("overrides") or {}).get("true_skyline")
+                       else PHOTO_CONFIDENCE_FILE)
             try:
-                with open(args.fit or PHOTO_CONFIDENCE_FILE) as f:
+                with open(args.fit or shipped) as f:
                     fit = json.load(f)
                 logit, threshold = tuple(float(v) for v in fit["logit"]), float(fit["min_confidence"])
                 runner_up_m = float(fit.get("runner_up_m", 1000.0))
@@ -634,7 +637,7 @@ def main(argv=None) -> int:
                 second = fit.get("second_opinion")
                 second = second and {k: float(second[k]) for k in ("from", "gain", "apart_m")}
             except (OSError, ValueError, KeyError, TypeError) as exc:
-                print(f"--fit: cannot read a photo-confidence fit from {args.fit or PHOTO_CONFIDENCE_FILE}: {exc}")
+                print(f"--fit: cannot read a photo-confidence fit from {args.fit or shipped}: {exc}")
                 return 2
             if any("refined_poses" not in r for r in report["photos"]) and runner_up_m != 1000.0:
                 print(f"--rescore: {name} keeps no refined poses, so its runner-ups beyond {runner_up_m:.0f} m "
