@@ -74,6 +74,10 @@ fit-photo-confidence: install
 		--second-opinion-rows experiments/ch1/rerank-cut-fov-unknown/bench-real-train-cut300.json \
 		experiments/ch1/rerank-cut-fov-unknown/bench-real-dev-cut300.json experiments/ch1/mode-agreement/bench-real-train-rest32.json \
 		experiments/ch1/telephoto-second-opinion/bench-real-dev-second-telephoto.json
+	# the same fit for skylines a person gives (localize --skyline / --sky-mask), from the training side localized
+	# from its masks' skylines (experiments/ch1/given-skyline/README.md says how those rows are made)
+	$(BIN)/python -m skyrender.training.localize_fit --from-rows --rows experiments/ch1/given-skyline/rows-training.json \
+		--out skyrender/localizer/given_skyline_confidence.json
 
 # retrain the sky network and refit the boundary search on the training split (CPU, ~10 min);
 # reproduces skyrender/features/weights/ for the seed
