@@ -30,12 +30,15 @@ def save_skyline(path, skyline: np.ndarray) -> None:
 
 
 def load_skyline(path) -> np.ndarray:
-    """Read a skyline written by :func:`save_skyline`."""
+    """Read a skyline written by :func:`save_skyline`, or the object ``skyrender skyline --json`` prints (its
+    ``"skyline"``)."""
     path = os.fspath(path)
     try:
         if path.lower().endswith(".json"):
             with open(path) as fh:
                 data = json.load(fh)
+            if isinstance(data, dict) and "skyline" in data:
+                data = data["skyline"]
             return np.array([np.nan if v is None else float(v) for v in data], dtype=np.float64)
         return np.asarray(np.load(path, allow_pickle=False), dtype=np.float64)
     except (OSError, ValueError, TypeError) as exc:

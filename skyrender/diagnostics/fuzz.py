@@ -7,7 +7,8 @@ within a time limit, writing nothing but the outputs asked for.
 Inputs (seeded): DEM files of each format (.hgt, GeoTIFF, .asc, .npy, .npz) truncated,
 with bytes flipped, all-NaN, all-void, one row, huge or infinite values; images (PNG,
 JPEG) truncated or corrupt, CMYK, 16-bit, gray with alpha, 1 x 1 and 100000 x 2;
-model directories corrupt, truncated or foreign; scene files for ``dataset`` and configs
+model directories corrupt, truncated or foreign; skyline files and sky masks for ``localize --skyline /
+--sky-mask`` of the wrong length, size or values, or damaged; scene files for ``dataset`` and configs
 for ``experiment`` with bad tables, values or bytes; and out-of-range or malformed flags.
 Each case runs in this process through :func:`skyrender.cli.main` with file
 descriptor 2 redirected, so a native decoder's own stderr line counts too. Reported:
@@ -199,6 +200,34 @@ def _image_files(work: str, rng: np.random.Generator, n: int) -> list[str]:
     return _with_mutants(files, valid, work, rng, n)
 
 
+def _skyline_files(work: str, rng: np.random.Generator, n: int, width: int = 128, height: int = 96) -> list[str]:
+    """n skyline files for ``localize --skyline`` on a ``width`` x ``height`` photo: wrong lengths and values, odd
+    JSON, then byte mutations of valid ``.npy`` and ``.json`` ones."""
+    from ..io import save_skyline
+
+    line = np.linspace(0.3, 0.6, width) * height
+    specials = {"short.json": line[:-1], "long.npy": np.r_[line, 10.0], "nan.json": np.full(width, np.nan),
+                "inf.npy": np.r_[line[:-1], np.inf], "negative.json": -line, "below.npy": line + height,
+                "matrix.npy": np.stack([line, line])}
+    files = []
+    for name, values in specials.items():
+        path = os.path.join(work, name)
+        save_skyline(path, values)
+        files.append(path)
+    for name, text in (("words.json", '["a", "b"]'), ("object.json", '{"width": 2}'), ("nested.json", "[[1, 2]]"),
+                       ("broken.json", "[1, 2")):
+        path = os.path.join(work, name)
+        with open(path, "w") as f:
+            f.write(text)
+        files.append(path)
+    valid = []
+    for ext in (".npy", ".json"):
+        path = os.path.join(work, f"sky{ext}")
+        save_skyline(path, line)
+        valid.append(path)
+    return _with_mutants(files, valid, work, rng, n)
+
+
 def _model_dirs(work: str, rng: np.random.Generator, valid_model: str, n: int) -> list[str]:
     """n model directories: foreign and corrupt model.json, missing or mutated arrays."""
     dirs = []
@@ -333,6 +362,11 @@ def make_cases(work: str, n: int, seed: int, valid_model: str) -> list[Case]:
                           ("t.ply", "t.xml")))
     for img in images:
         cases.append(Case(f"skyline {os.path.basename(img)}", ["skyline", img, "--json"]))
+    localize = ["localize", image, "--model", valid_model, "--height", "2", "--fov", "50", "--json"]
+    for sky in _skyline_files(work, rng, max(12, n // 40)):
+        cases.append(Case(f"localize --skyline {os.path.basename(sky)}", [*localize, "--skyline", sky]))
+    for img in images[:: max(1, len(images) // max(6, n // 80))]:
+        cases.append(Case(f"localize --sky-mask {os.path.basename(img)}", [*localize, "--sky-mask", img]))
     for scene in _scene_files(work, rng, dems[::6], max(2, n // 40)):
         cases.append(Case(f"dataset {os.path.basename(scene)}", ["dataset", scene, "--n", "1", "--out", "ds", "--quiet"],
                           ("ds",)))
