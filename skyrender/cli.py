@@ -140,13 +140,15 @@ def skyline(
     overlay: Optional[Path] = typer.Option(None, "--overlay", help="write the photo with the skyline drawn"),
     peaks: int = typer.Option(6, "--peaks", help="skyline peaks to report (with --json)"),
     json_out: bool = typer.Option(False, "--json", help="print {width, height, skyline} as one JSON object"),
+    mask_out: Optional[Path] = typer.Option(None, "--mask-out", help="write the sky mask (PNG, white = sky): to "
+                                            "correct by hand where the skyline is wrong and give to 'localize --sky-mask'"),
     method: str = typer.Option("auto", "--method", help="hybrid (learned + per-photo colour mixtures), net (learned), "
                                "gmm (per-photo colour mixtures), select (hybrid and gmm, the one more confident "
                                "where they part) or auto: select for camera photos (JPEG or camera EXIF), gmm for "
                                "others (renders)"),
 ):
     """Extract the skyline (sky/terrain boundary per column) from a photograph."""
-    from .features import SkylineParams, extract_skyline, load_photo, skyline_peaks
+    from .features import SkylineParams, extract_skyline, load_photo, sky_mask_of_skyline, skyline_peaks
     from .features.photo_io import is_camera_photo
     from .io import save_skyline, skyline_to_list
     from .viz import draw_skyline, write_image
@@ -155,7 +157,8 @@ def skyline(
         raise InputError(f"--peaks must be >= 0, got {peaks}")
     if method not in ("auto", "select", "hybrid", "net", "gmm"):
         raise InputError(f"--method must be auto, select, hybrid, net or gmm, got {method!r}")
-    for path, option, kinds in ((out, "--out", SKYLINE_SUFFIXES), (overlay, "--overlay", IMAGE_SUFFIXES)):
+    for path, option, kinds in ((out, "--out", SKYLINE_SUFFIXES), (overlay, "--overlay", IMAGE_SUFFIXES),
+                                (mask_out, "--mask-out", (".png",))):
         if path is not None:
             _check_writable(path, option, kinds)
     photo = load_photo(image)
@@ -167,6 +170,8 @@ def skyline(
     if overlay is not None:
         write_image(overlay, draw_skyline(photo, result.skyline))
     H, W = photo.shape[:2]
+    if mask_out is not None:
+        write_image(mask_out, np.where(sky_mask_of_skyline(result.skyline, H), 255, 0).astype(np.uint8))
     found = skyline_peaks(result.skyline, n=peaks)
     if json_out:
         emit_json({"width": W, "height": H, "skyline": skyline_to_list(result.skyline),

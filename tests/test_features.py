@@ -542,14 +542,14 @@ def test_photo_loading_normalises_formats(tmp_path):
     assert as_rgb8(rgb.astype(np.float32) / 255.0).dtype == np.uint8
 
 
-@pytest.mark.parametrize("case", ["text", "one_pixel", "missing"])
+@pytest.mark.parametrize("case", ["text", "one_pixel", "missing", "mask_not_png"])
 def test_cli_skyline_bad_input_gives_one_line_and_exit_2(case, tmp_path, capsys):
     path = tmp_path / "x.png"
     if case == "text":
         path.write_text("not an image")
-    elif case == "one_pixel":
-        cv2.imwrite(str(path), np.zeros((1, 1, 3), np.uint8))
-    code = main(["skyline", str(path)])
+    elif case in ("one_pixel", "mask_not_png"):
+        cv2.imwrite(str(path), np.zeros((1, 1, 3) if case == "one_pixel" else (60, 80, 3), np.uint8))
+    code = main(["skyline", str(path), *(["--mask-out", str(tmp_path / "m.jpg")] if case == "mask_not_png" else [])])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and err[0].startswith("skyrender: error:")
 
@@ -1016,3 +1016,14 @@ def test_a_terrain_masks_skyline_is_the_top_edge_of_each_columns_first_terrain_p
     np.testing.assert_array_equal(skyline_of_terrain(terrain), [3.0, np.nan, 1.0, 0.0])
     np.testing.assert_array_equal(truth_from_mask(np.where(terrain, 255, 0).astype(np.uint8)),
                                   skyline_of_terrain(terrain))
+
+
+def test_a_skylines_sky_mask_gives_it_back_to_the_nearest_row():
+    """sky_mask_of_skyline: sky where a pixel's centre lies above the line; the mask's own skyline
+    (skyline_of_terrain of its complement) is the line to the nearest row, exactly where it was whole."""
+    from skyrender.features import sky_mask_of_skyline, skyline_of_terrain
+
+    line = np.array([3.0, np.nan, 0.0, 2.4, 2.6, 6.0, 5.2])
+    mask = sky_mask_of_skyline(line, 6)
+    assert mask.shape == (6, 7) and mask[:, 1].all() and not mask[:, 2].any() and mask[:, 5].all()
+    np.testing.assert_array_equal(skyline_of_terrain(~mask), [3.0, np.nan, 0.0, 2.0, 3.0, np.nan, 5.0])

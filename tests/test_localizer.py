@@ -615,8 +615,13 @@ def test_cli_localize_from_a_skyline_or_sky_mask_you_give(scene, views, model_di
     rows = np.arange(K.height)[:, None]
     mask = np.where(rows < np.nan_to_num(sky, nan=K.height)[None, :], 255, 0).astype(np.uint8)
     write_image(tmp_path / "mask.png", np.repeat(mask[..., None], 3, axis=2))
+    # the operator's way: the skyline extracted from the photo, as a mask to correct by hand (left as it is here)
+    write_image(tmp_path / "photo.png", photo_of(terrain, pose))
+    code, _, err = _run(capsys, ["skyline", tmp_path / "photo.png", "--mask-out", tmp_path / "extracted.png"])
+    assert code == 0, err
     for given in (["--skyline", tmp_path / "sky.json"], ["--skyline", tmp_path / "sky.npy"],
-                  ["--skyline", tmp_path / "printed.json"], ["--sky-mask", tmp_path / "mask.png"]):
+                  ["--skyline", tmp_path / "printed.json"], ["--sky-mask", tmp_path / "mask.png"],
+                  ["--sky-mask", tmp_path / "extracted.png"]):
         code, out, err = _run(capsys, ["localize", tmp_path / "grey.png", *common, *given])
         assert code == 0, (given, err)
         doc = json.loads(out)

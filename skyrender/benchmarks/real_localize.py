@@ -117,11 +117,10 @@ def model_overrides(text: str | None):
 
 def true_extraction(item, height: int):
     """The photo's true skyline as an extraction: every column trusted, P(sky) 1 above it and 0 below."""
-    from ..features.skyline import ExtractedSkyline
+    from ..features.skyline import ExtractedSkyline, sky_mask_of_skyline
 
     sky = item.truth_skyline()
-    probability = (np.arange(height)[:, None] < np.nan_to_num(sky, nan=height)[None, :]).astype(np.float32)
-    return ExtractedSkyline(sky, np.ones(len(sky)), probability)
+    return ExtractedSkyline(sky, np.ones(len(sky)), sky_mask_of_skyline(sky, height).astype(np.float32))
 
 
 def run(items, fov_modes: list[str], progress: bool = True, params=None, unknown_every: int = 1,

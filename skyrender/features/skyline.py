@@ -469,6 +469,14 @@ def skyline_of_terrain(terrain: np.ndarray) -> np.ndarray:
     return v
 
 
+def sky_mask_of_skyline(skyline: np.ndarray, height: int) -> np.ndarray:
+    """(height, W) bool sky mask of a skyline (W,) (px; NaN: all sky): a pixel is sky where its centre lies above the
+    line (row + 0.5 < v). :func:`skyline_of_terrain` of its complement gives the skyline back rounded to whole rows,
+    exactly where it was whole (a mask's own skyline)."""
+    v = np.nan_to_num(np.asarray(skyline, np.float64), nan=float(height))
+    return (np.arange(height) + 0.5)[:, None] < v[None, :]
+
+
 def boundary_skyline(rows: np.ndarray, sub: np.ndarray, H: int) -> np.ndarray:
     """Skyline (W,) from integer boundary rows and their sub-pixel refinement: NaN where a
     column is all sky (row H), 0 where terrain reaches the top edge."""
