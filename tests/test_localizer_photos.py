@@ -103,15 +103,21 @@ def test_photo_confidence_is_a_logistic_of_the_margin_to_the_runner_up():
 
 def test_a_given_skyline_takes_the_confidence_fitted_for_given_skylines():
     """``for_given_skyline`` (``localize --skyline / --sky-mask``, ``bench-real --true-skyline``): the photo preset's
-    margin logistic and threshold become those fitted on skylines given that way, with the fov unknown never below the
-    extracted skyline's threshold, and no second opinion (fitted on extracted skylines); the render preset, whose
-    confidence is the agreement, is unchanged."""
-    from skyrender.localizer.confidence import GIVEN_SKYLINE_MARGIN_LOGIT, GIVEN_SKYLINE_MIN_CONFIDENCE
+    margin logistic and thresholds become those fitted on skylines given that way (with the fov unknown, where none was
+    fitted, never below the extracted skyline's threshold), and no second opinion (fitted on extracted skylines); the
+    render preset, whose confidence is the agreement, is unchanged."""
+    from skyrender.localizer.confidence import (
+        GIVEN_SKYLINE_MARGIN_LOGIT,
+        GIVEN_SKYLINE_MIN_CONFIDENCE,
+        GIVEN_SKYLINE_MIN_CONFIDENCE_FOV_UNKNOWN,
+    )
 
     photo = LocalizeParams.for_photos()
     given = photo.for_given_skyline()
     assert given.margin_logit == GIVEN_SKYLINE_MARGIN_LOGIT and given.min_confidence == GIVEN_SKYLINE_MIN_CONFIDENCE
-    assert given.abstain_below(fov_unknown=True) >= max(GIVEN_SKYLINE_MIN_CONFIDENCE, photo.abstain_below(True))
+    assert given.abstain_below(fov_unknown=True) == (
+        GIVEN_SKYLINE_MIN_CONFIDENCE_FOV_UNKNOWN if GIVEN_SKYLINE_MIN_CONFIDENCE_FOV_UNKNOWN is not None
+        else max(GIVEN_SKYLINE_MIN_CONFIDENCE, photo.abstain_below(True)))
     assert given.second_opinion_from == np.inf and photo.second_opinion_from < np.inf
     assert given.horizon == photo.horizon and given.skyline_method == photo.skyline_method  # the search as before
     assert LocalizeParams().for_given_skyline() == LocalizeParams()

@@ -73,6 +73,9 @@ _GIVEN_FIT = _photo_confidence_fit(GIVEN_SKYLINE_CONFIDENCE_FILE) or _FIT  # the
 #: The photo confidence's logistic and threshold for a given skyline (:data:`GIVEN_SKYLINE_CONFIDENCE_FILE`).
 GIVEN_SKYLINE_MARGIN_LOGIT = _photo_margin_logit(_GIVEN_FIT)
 GIVEN_SKYLINE_MIN_CONFIDENCE = float(_GIVEN_FIT.get("min_confidence", PHOTO_MIN_CONFIDENCE))
+#: ... and with the fov unknown, where fitted on training photos localized that way from their masks (else None)
+GIVEN_SKYLINE_MIN_CONFIDENCE_FOV_UNKNOWN = (float(_GIVEN_FIT["min_confidence_fov_unknown"])
+                                            if "min_confidence_fov_unknown" in _GIVEN_FIT else None)
 
 
 def confidence_of(best: Refined, runner_up: Refined | None) -> float:

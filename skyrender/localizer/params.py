@@ -14,6 +14,7 @@ from ..features.skyline import SkylineParams
 from .confidence import (
     GIVEN_SKYLINE_MARGIN_LOGIT,
     GIVEN_SKYLINE_MIN_CONFIDENCE,
+    GIVEN_SKYLINE_MIN_CONFIDENCE_FOV_UNKNOWN,
     PHOTO_MARGIN_LOGIT,
     PHOTO_MIN_CONFIDENCE,
     PHOTO_MIN_CONFIDENCE_FOV_UNKNOWN,
@@ -246,12 +247,13 @@ class LocalizeParams:
     def for_given_skyline(self) -> "LocalizeParams":
         """These parameters for a skyline a person gives (:func:`~skyrender.features.given_skyline`: every column
         trusted) instead of one extracted: with the photo confidence (``"margin"``) its fit on given skylines
-        (:data:`.confidence.GIVEN_SKYLINE_MARGIN_LOGIT`) and that fit's threshold, with the fov unknown never below
-        the extracted skyline's threshold there (no fov-unknown localizations from given skylines were fitted), and no
-        second opinion (fitted on extracted skylines only). With another confidence model, unchanged."""
+        (:data:`.confidence.GIVEN_SKYLINE_MARGIN_LOGIT`) and that fit's thresholds (with the fov unknown, the one
+        fitted on fov-unknown localizations from given skylines; without one, never below the extracted skyline's
+        there), and no second opinion (fitted on extracted skylines only). With another confidence model, unchanged."""
         if self.confidence_model != "margin":
             return self
-        unknown = max(GIVEN_SKYLINE_MIN_CONFIDENCE, self.abstain_below(fov_unknown=True))
+        unknown = (GIVEN_SKYLINE_MIN_CONFIDENCE_FOV_UNKNOWN if GIVEN_SKYLINE_MIN_CONFIDENCE_FOV_UNKNOWN is not None
+                   else max(GIVEN_SKYLINE_MIN_CONFIDENCE, self.abstain_below(fov_unknown=True)))
         return replace(self, margin_logit=GIVEN_SKYLINE_MARGIN_LOGIT, min_confidence=GIVEN_SKYLINE_MIN_CONFIDENCE,
                        min_confidence_fov_unknown=unknown, second_opinion_from=math.inf)
 
