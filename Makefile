@@ -77,6 +77,8 @@ fit-photo-confidence: install
 	# the same fit for skylines a person gives (localize --skyline / --sky-mask), from the training side localized
 	# from its masks' skylines (experiments/ch1/given-skyline/README.md says how those rows are made)
 	$(BIN)/python -m skyrender.training.localize_fit --from-rows --rows experiments/ch1/given-skyline/rows-training.json \
+		--fov-unknown-rows experiments/ch1/given-skyline/bench-real-dev-true-skyline-unknown.json \
+		experiments/ch1/given-skyline/bench-real-train-true-skyline-unknown.json \
 		--out skyrender/localizer/given_skyline_confidence.json
 
 # retrain the sky network and refit the boundary search on the training split (CPU, ~10 min);
