@@ -597,6 +597,7 @@ def test_cli_localize_from_a_skyline_or_sky_mask_you_give(scene, views, model_di
     the photo's skyline is the one given, not the extracted one. A photo of one flat grey shows no skyline to
     extract, so it abstains alone; with the view's rendered skyline given as a file or painted as a mask it is
     localized where the view was taken."""
+    from skyrender.features import sky_mask_of_skyline
     from skyrender.io import save_skyline, skyline_to_list
     from skyrender.render import render_skylines
     from skyrender.viz import write_image
@@ -612,8 +613,7 @@ def test_cli_localize_from_a_skyline_or_sky_mask_you_give(scene, views, model_di
     save_skyline(tmp_path / "sky.npy", sky)
     (tmp_path / "printed.json").write_text(json.dumps({"width": K.width, "height": K.height,  # skyline --json's
                                                        "skyline": skyline_to_list(sky)}))
-    rows = np.arange(K.height)[:, None]
-    mask = np.where(rows < np.nan_to_num(sky, nan=K.height)[None, :], 255, 0).astype(np.uint8)
+    mask = np.where(sky_mask_of_skyline(sky, K.height), 255, 0).astype(np.uint8)
     write_image(tmp_path / "mask.png", np.repeat(mask[..., None], 3, axis=2))
     # the operator's way: the skyline extracted from the photo, as a mask to correct by hand (left as it is here)
     write_image(tmp_path / "photo.png", photo_of(terrain, pose))
