@@ -1,4 +1,4 @@
-"""The sky network's training augmentations (numpy and OpenCV only: no PyTorch needed)."""
+"""The sky network's training augmentations (numpy and OpenCV only: no PyTorch needed) and its layouts (PyTorch)."""
 
 import numpy as np
 
@@ -52,3 +52,23 @@ def test_augment_is_deterministic_for_a_seed_and_keeps_the_labels_of_no_recolour
     assert all(np.array_equal(x, y) for x, y in zip(a, b))
     assert np.array_equal(a[1], c[1]) and np.array_equal(a[2], c[2])  # recolouring never moves the boundary
     assert not np.array_equal(a[0], c[0])
+
+
+def test_network_layouts_build_and_the_default_is_the_shipped_one():
+    """``--arch unet`` builds the shipped network (its 229,737 weights, no context branch); the probed layouts add the
+    image-level context (and 1.5x the channels) and give logits at half the input size. Needs PyTorch (``.[train]``)."""
+    import pytest
+
+    torch = pytest.importorskip("torch")
+    from skyrender.training.sky_net import ARCHITECTURES, build_model
+
+    counts = {}
+    for arch in ARCHITECTURES:
+        model = build_model(arch)
+        counts[arch] = sum(p.numel() for p in model.parameters())
+        with torch.no_grad():
+            assert model(torch.zeros(1, 4, 64, 96)).shape == (1, 1, 32, 48)
+    assert counts["unet"] == 229737
+    assert counts["unet"] < counts["unet-context"] < counts["unet-context-wide"]
+    with pytest.raises(ValueError, match="unknown sky network architecture"):
+        build_model("resnet")

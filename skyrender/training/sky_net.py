@@ -1,6 +1,6 @@
 """Train the sky network of :mod:`skyrender.features.sky_net` and export it to ONNX.
 
-``python -m skyrender.training.sky_net [--steps 12000] [--seed 1] [--threads 1]`` (``make train-sky-net``)
+``python -m skyrender.training.sky_net [--steps 12000] [--seed 1] [--threads 1] [--arch unet]`` (``make train-sky-net``)
 
 The shipped weights (2026-12-04): 12,000 steps, seed 1, ~28 min on one core. The earlier 4,000 steps
 underfitted (the network alone 86.2 % of its own training photos' columns within 5 px; 12,000: 91.8 %);
@@ -22,6 +22,9 @@ random, with random exposure, white balance, gamma, saturation and noise; the lo
 is the binary cross-entropy at half resolution, weighted 5x within 3 px of the
 boundary, and 0 where the truth is unknown (Web columns with no red mark).
 
+``--arch`` picks the layout (:func:`build_model`); an image-level context and 1.5x the channels were
+trained and did no better on dev (``experiments/photos/net-context/``).
+
 Deterministic for a seed and thread count on one machine (PyTorch's CPU kernels). Writes
 the ONNX weights and ``sky_net.json`` (seed, steps, data counts, loss curve) beside them.
 """
@@ -42,10 +45,23 @@ TRAIN_WIDTHS = (352, 544)  # random input width per step (multiples of STRIDE)
 PRELOAD_WIDTH = 640
 
 
-def build_model():
-    """The network: a four-level U-Net, output P(sky) logits at half the input resolution."""
+ARCHITECTURES = ("unet", "unet-context", "unet-context-wide")
+
+
+def build_model(arch: str = "unet"):
+    """The network: a four-level U-Net, output P(sky) logits at half the input resolution.
+
+    ``arch``: ``unet`` (the shipped weights); ``unet-context`` adds an image-level context
+    (the deepest features averaged over the whole photo, mixed by a 1x1 convolution and added
+    back at every position: whether a pale band is cloud or snow can depend on what lies far
+    from it); ``unet-context-wide`` is that with 1.5x the channels at every level."""
     import torch
     from torch import nn
+
+    if arch not in ARCHITECTURES:
+        raise ValueError(f"unknown sky network architecture {arch!r} (one of {', '.join(ARCHITECTURES)})")
+    k = 1.5 if arch.endswith("wide") else 1.0
+    c1, c2, c3, c4, c0 = (int(round(c * k)) for c in (16, 32, 48, 64, 12))
 
     def block(i, o, stride=1, dilation=1):
         return nn.Sequential(nn.Conv2d(i, o, 3, stride=stride, padding=dilation, dilation=dilation), nn.ReLU())
@@ -53,14 +69,16 @@ def build_model():
     class SkyNet(nn.Module):
         def __init__(self):
             super().__init__()
-            self.enc2 = nn.Sequential(block(4, 16, 2), block(16, 16))  # 1/2
-            self.enc4 = nn.Sequential(block(16, 32, 2), block(32, 32))  # 1/4
-            self.enc8 = nn.Sequential(block(32, 48, 2), block(48, 48))  # 1/8
-            self.ctx = nn.Sequential(block(48, 64, 2), block(64, 64, dilation=2), block(64, 64, dilation=4))  # 1/16
-            self.dec8 = block(64 + 48, 48)
-            self.dec4 = block(48 + 32, 32)
-            self.dec2 = block(32 + 16, 12)
-            self.head = nn.Conv2d(12, 1, 1)
+            self.enc2 = nn.Sequential(block(4, c1, 2), block(c1, c1))  # 1/2
+            self.enc4 = nn.Sequential(block(c1, c2, 2), block(c2, c2))  # 1/4
+            self.enc8 = nn.Sequential(block(c2, c3, 2), block(c3, c3))  # 1/8
+            self.ctx = nn.Sequential(block(c3, c4, 2), block(c4, c4, dilation=2), block(c4, c4, dilation=4))  # 1/16
+            self.scene = (nn.Sequential(nn.AdaptiveAvgPool2d(1), nn.Conv2d(c4, c4, 1), nn.ReLU())
+                          if arch != "unet" else None)
+            self.dec8 = block(c4 + c3, c3)
+            self.dec4 = block(c3 + c2, c2)
+            self.dec2 = block(c2 + c1, c0)
+            self.head = nn.Conv2d(c0, 1, 1)
 
         def forward(self, x):
             up = nn.functional.interpolate
@@ -68,6 +86,8 @@ def build_model():
             e4 = self.enc4(e2)
             e8 = self.enc8(e4)
             c = self.ctx(e8)
+            if self.scene is not None:
+                c = c + self.scene(c)
             d8 = self.dec8(torch.cat([up(c, scale_factor=2.0, mode="bilinear", align_corners=False), e8], 1))
             d4 = self.dec4(torch.cat([up(d8, scale_factor=2.0, mode="bilinear", align_corners=False), e4], 1))
             d2 = self.dec2(torch.cat([up(d4, scale_factor=2.0, mode="bilinear", align_corners=False), e2], 1))
@@ -175,14 +195,14 @@ def boundary_weight(sky: np.ndarray, known: np.ndarray, reach: int = 3, gain: fl
 
 
 def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: int = 100, threads: int = 2,
-          dev_folds: tuple[int, ...] = (), recolour: float = 0.0) -> dict:
+          dev_folds: tuple[int, ...] = (), recolour: float = 0.0, arch: str = "unet") -> dict:
     import torch
 
     torch.manual_seed(seed)
     torch.set_num_threads(threads)
     rng = np.random.default_rng(seed)
     data = load_training_set(renders, seed, dev_folds)
-    model = build_model()
+    model = build_model(arch)
     opt = torch.optim.Adam(model.parameters(), lr=2e-3)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=2e-3, total_steps=steps, pct_start=0.1)
     losses, curve, t0 = [], [], time.perf_counter()
@@ -214,7 +234,7 @@ def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: in
         torch.onnx.export(model, example, out, dynamo=False, input_names=["x"], output_names=["logits"],
                           dynamic_axes={"x": {2: "h", 3: "w"}, "logits": {2: "h2", 3: "w2"}}, opset_version=17)
     log = {"seed": seed, "steps": steps, "renders": renders, "threads": threads, "photos": len(data) - renders,
-           "dev_folds": list(dev_folds), "recolour": recolour,
+           "dev_folds": list(dev_folds), "recolour": recolour, "arch": arch,
            "train_widths": TRAIN_WIDTHS, "torch": torch.__version__, "curve": curve,
            "seconds": round(time.perf_counter() - t0, 1)}
     with open(os.path.splitext(out)[0] + ".json", "w") as f:
@@ -233,10 +253,12 @@ def main(argv=None) -> int:
                         help="also train on these folds of the dev photos (cross-fitting; the others stay unseen)")
     parser.add_argument("--recolour", type=float, default=0.0,
                         help="share of steps whose terrain near the skyline is hazed or whitened, or whose sky is tinted")
+    parser.add_argument("--arch", choices=ARCHITECTURES, default="unet",
+                        help="the network's layout (unet: the shipped weights; see build_model)")
     parser.add_argument("--out", default=WEIGHTS)
     args = parser.parse_args(argv)
     log = train(args.steps, args.seed, args.renders, args.out, threads=args.threads, dev_folds=tuple(args.dev_fold),
-                recolour=args.recolour)
+                recolour=args.recolour, arch=args.arch)
     print(f"wrote {args.out} ({log['photos']} photos, {log['renders']} renders, {log['seconds']:.0f} s)")
     return 0
 
