@@ -261,6 +261,8 @@ def localize(
                                                 "it (corrected by hand, say)"),
     sky_mask: Optional[Path] = typer.Option(None, "--sky-mask", help="a mask of the photo's size, white where it shows "
                                             "sky: its skyline instead of the extracted one"),
+    terrain_mask: Optional[Path] = typer.Option(None, "--terrain-mask", help="as --sky-mask, but white where it shows "
+                                                "terrain (the CH1 and GeoPose3K masks' convention)"),
     stats: bool = typer.Option(False, "--stats", help="print per-stage times and hypothesis counts (stderr)"),
     prior_peak: Optional[list[int]] = typer.Option(None, "--prior-peak", help="id of a model peak known to be in view"),
     prior_near: Optional[str] = typer.Option(None, "--prior-near", help="X,Y,RADIUS: a peak within RADIUS m is in view"),
@@ -278,9 +280,9 @@ def localize(
 
     Exit status 0: localized; 3: abstained (no pose it would stand behind). With ``--candidates N``
     the best N distinct places it refined are listed too (``"candidates"`` in ``--json``, points in
-    ``--geojson``), abstaining or not: only the first, the answer's, has a confidence. With ``--skyline`` or
-    ``--sky-mask`` the photo's skyline is yours, not extracted (every column trusted; the photo preset's confidence
-    then is the one fitted for such skylines)."""
+    ``--geojson``), abstaining or not: only the first, the answer's, has a confidence. With ``--skyline``,
+    ``--sky-mask`` or ``--terrain-mask`` the photo's skyline is yours, not extracted (every column trusted; the
+    photo preset's confidence then is the one fitted for such skylines)."""
     from dataclasses import replace
 
     from .features import given_skyline, load_photo
@@ -305,12 +307,12 @@ def localize(
             _check_writable(path, option, kinds)
     if preset not in ("auto", "photo", "render"):
         raise InputError(f"--preset must be auto, photo or render, got {preset!r}")
-    if skyline_file is not None and sky_mask is not None:
-        raise InputError("give at most one of --skyline and --sky-mask")
+    if sum(p is not None for p in (skyline_file, sky_mask, terrain_mask)) > 1:
+        raise InputError("give at most one of --skyline, --sky-mask and --terrain-mask")
     prior = _parse_prior(prior_peak, prior_near)
     photo = load_photo(image)
-    given = (None if skyline_file is None and sky_mask is None else
-             given_skyline(photo.shape[1], photo.shape[0], skyline_file, sky_mask))
+    given = (None if skyline_file is None and sky_mask is None and terrain_mask is None else
+             given_skyline(photo.shape[1], photo.shape[0], skyline_file, sky_mask, terrain_mask))
     from_exif = exif_fov(str(image)) if fov is None else None
     if preset == "auto":
         preset = "photo" if is_camera_photo(str(image)) else "render"

@@ -593,7 +593,8 @@ def test_cli_localize_abstains_with_exit_3(model_dir, tmp_path, capsys):
 
 
 def test_cli_localize_from_a_skyline_or_sky_mask_you_give(scene, views, model_dir, tmp_path, capsys):
-    """``localize --skyline FILE`` (.json or .npy, CONTRACT.md's skyline) and ``--sky-mask IMAGE`` (white = sky):
+    """``localize --skyline FILE`` (.json or .npy, CONTRACT.md's skyline), ``--sky-mask IMAGE`` (white = sky) and
+    ``--terrain-mask IMAGE`` (white = terrain):
     the photo's skyline is the one given, not the extracted one. A photo of one flat grey shows no skyline to
     extract, so it abstains alone; with the view's rendered skyline given as a file or painted as a mask it is
     localized where the view was taken."""
@@ -615,21 +616,23 @@ def test_cli_localize_from_a_skyline_or_sky_mask_you_give(scene, views, model_di
                                                        "skyline": skyline_to_list(sky)}))
     mask = np.where(sky_mask_of_skyline(sky, K.height), 255, 0).astype(np.uint8)
     write_image(tmp_path / "mask.png", np.repeat(mask[..., None], 3, axis=2))
+    write_image(tmp_path / "terrain.png", np.repeat(255 - mask[..., None], 3, axis=2))  # the CH1 masks' way round
     # the operator's way: the skyline extracted from the photo, as a mask to correct by hand (left as it is here)
     write_image(tmp_path / "photo.png", photo_of(terrain, pose))
     code, _, err = _run(capsys, ["skyline", tmp_path / "photo.png", "--mask-out", tmp_path / "extracted.png"])
     assert code == 0, err
     for given in (["--skyline", tmp_path / "sky.json"], ["--skyline", tmp_path / "sky.npy"],
                   ["--skyline", tmp_path / "printed.json"], ["--sky-mask", tmp_path / "mask.png"],
-                  ["--sky-mask", tmp_path / "extracted.png"]):
+                  ["--terrain-mask", tmp_path / "terrain.png"], ["--sky-mask", tmp_path / "extracted.png"]):
         code, out, err = _run(capsys, ["localize", tmp_path / "grey.png", *common, *given])
         assert code == 0, (given, err)
         doc = json.loads(out)
         assert np.hypot(doc["x"] - pose.x, doc["y"] - pose.y) < POS_TOL_M, given
 
 
-@pytest.mark.parametrize("case", ["both_given", "short_skyline", "skyline_out_of_frame", "all_sky_skyline",
-                                  "mask_size", "mask_without_sky", "mask_missing"])
+@pytest.mark.parametrize("case", ["both_given", "both_masks", "short_skyline", "skyline_out_of_frame", "all_sky_skyline",
+                                  "mask_size", "mask_without_sky", "mask_missing", "terrain_mask_without_sky",
+                                  "terrain_mask_size"])
 def test_cli_localize_a_given_skyline_that_does_not_fit_is_one_line_and_exit_2(case, model_dir, tmp_path, capsys):
     from skyrender.io import save_skyline
     from skyrender.viz import write_image
@@ -642,13 +645,17 @@ def test_cli_localize_a_given_skyline_that_does_not_fit_is_one_line_and_exit_2(c
     save_skyline(tmp_path / "nan.json", np.full(80, np.nan))
     write_image(tmp_path / "small.png", np.full((30, 40, 3), 255, np.uint8))
     write_image(tmp_path / "black.png", np.zeros((60, 80, 3), np.uint8))
+    write_image(tmp_path / "white.png", np.full((60, 80, 3), 255, np.uint8))
     given = {"both_given": ["--skyline", tmp_path / "ok.json", "--sky-mask", tmp_path / "small.png"],
              "short_skyline": ["--skyline", tmp_path / "short.json"],
              "skyline_out_of_frame": ["--skyline", tmp_path / "out.npy"],
              "all_sky_skyline": ["--skyline", tmp_path / "nan.json"],
              "mask_size": ["--sky-mask", tmp_path / "small.png"],
              "mask_without_sky": ["--sky-mask", tmp_path / "black.png"],
-             "mask_missing": ["--sky-mask", tmp_path / "none.png"]}[case]
+             "mask_missing": ["--sky-mask", tmp_path / "none.png"],
+             "both_masks": ["--sky-mask", tmp_path / "black.png", "--terrain-mask", tmp_path / "black.png"],
+             "terrain_mask_without_sky": ["--terrain-mask", tmp_path / "white.png"],
+             "terrain_mask_size": ["--terrain-mask", tmp_path / "small.png"]}[case]
     code, out, err = _run(capsys, ["localize", img, "--model", model_dir, "--height", 2, "--fov", 60, *given])
     assert code == 2 and out == ""
     assert len(err.strip().splitlines()) == 1 and err.startswith("skyrender: error:")

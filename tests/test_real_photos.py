@@ -142,6 +142,25 @@ def test_a_probe_of_model_parameters_is_cached_apart_and_refuses_unknown_fields(
     assert "IMG_4922_01024" in capsys.readouterr().out
 
 
+def test_a_ch1_mask_given_as_a_terrain_mask_is_that_photos_true_skyline(tmp_path):
+    """``localize --terrain-mask`` takes the CH1 and GeoPose3K masks as they come (white = terrain): the skyline it gives
+    is the one the benchmarks score against, and the same mask inverted through ``--sky-mask`` gives it too."""
+    import cv2
+
+    from skyrender.features import given_skyline
+    from skyrender.viz import write_image
+
+    data_path("photos", "ch1")
+    item = next(it for it in photo_items(str(DATA / "photos")) if it.key == "ch1/DSCF3435_01024")
+    H, W = load_photo(item.image_path).shape[:2]
+    truth = item.truth_skyline()
+    from_terrain = given_skyline(W, H, terrain_mask_path=item.truth_path)
+    np.testing.assert_array_equal(from_terrain, truth)
+    assert np.isfinite(truth).mean() > 0.9
+    write_image(tmp_path / "sky.png", 255 - cv2.imread(item.truth_path))
+    np.testing.assert_array_equal(given_skyline(W, H, sky_mask_path=tmp_path / "sky.png"), truth)
+
+
 def _write_geotiff(path, z, west, north, step):
     import rasterio
     from affine import Affine

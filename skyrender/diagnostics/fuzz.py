@@ -7,8 +7,8 @@ within a time limit, writing nothing but the outputs asked for.
 Inputs (seeded): DEM files of each format (.hgt, GeoTIFF, .asc, .npy, .npz) truncated,
 with bytes flipped, all-NaN, all-void, one row, huge or infinite values; images (PNG,
 JPEG) truncated or corrupt, CMYK, 16-bit, gray with alpha, 1 x 1 and 100000 x 2;
-model directories corrupt, truncated or foreign; skyline files and sky masks for ``localize --skyline /
---sky-mask`` of the wrong length, size or values, or damaged; scene files for ``dataset`` and configs
+model directories corrupt, truncated or foreign; skyline files and masks for ``localize --skyline /
+--sky-mask / --terrain-mask`` of the wrong length, size or values, or damaged; scene files for ``dataset`` and configs
 for ``experiment`` with bad tables, values or bytes; and out-of-range or malformed flags.
 Each case runs in this process through :func:`skyrender.cli.main` with file
 descriptor 2 redirected, so a native decoder's own stderr line counts too. Reported:
@@ -365,8 +365,9 @@ def make_cases(work: str, n: int, seed: int, valid_model: str) -> list[Case]:
     localize = ["localize", image, "--model", valid_model, "--height", "2", "--fov", "50", "--json"]
     for sky in _skyline_files(work, rng, max(12, n // 40)):
         cases.append(Case(f"localize --skyline {os.path.basename(sky)}", [*localize, "--skyline", sky]))
-    for img in images[:: max(1, len(images) // max(6, n // 80))]:
-        cases.append(Case(f"localize --sky-mask {os.path.basename(img)}", [*localize, "--sky-mask", img]))
+    for i, img in enumerate(images[:: max(1, len(images) // max(6, n // 80))]):
+        option = ("--sky-mask", "--terrain-mask")[i % 2]
+        cases.append(Case(f"localize {option} {os.path.basename(img)}", [*localize, option, img]))
     for scene in _scene_files(work, rng, dems[::6], max(2, n // 40)):
         cases.append(Case(f"dataset {os.path.basename(scene)}", ["dataset", scene, "--n", "1", "--out", "ds", "--quiet"],
                           ("ds",)))

@@ -133,26 +133,31 @@ def exif_fov(path: str) -> float | None:
     return horizontal_fov(w, f_px)
 
 
-def given_skyline(width: int, height: int, skyline_path=None, sky_mask_path=None) -> np.ndarray:
+def given_skyline(width: int, height: int, skyline_path=None, sky_mask_path=None, terrain_mask_path=None) -> np.ndarray:
     """The skyline (W,) float64 of a ``width`` x ``height`` (upright) photo as a person gives it, in place of the
     extracted one: a skyline file (``skyline_path``; CONTRACT.md, *Skyline*: ``.npy`` float64 or a JSON list with
-    null for NaN, as ``skyrender skyline --out`` writes it, perhaps corrected by hand) or a sky mask
-    (``sky_mask_path``: an image of the photo's size, EXIF orientation applied, white = sky: grey level above 127).
+    null for NaN, as ``skyrender skyline --out`` writes it, perhaps corrected by hand), a sky mask (``sky_mask_path``:
+    an image of the photo's size, EXIF orientation applied, white = sky: grey level above 127) or a terrain mask
+    (``terrain_mask_path``: the same with white = terrain, as the CH1 and GeoPose3K masks are). Exactly one.
     Baatz et al.'s CH1 results used skylines "either automatic or easily supported by an operator for challenging
     pictures"; this is that operator's way in. InputError names what does not fit the photo."""
     from ..io import load_skyline
     from .skyline import skyline_of_terrain
 
-    if (skyline_path is None) == (sky_mask_path is None):
-        raise InputError("give one of a skyline file and a sky mask")
-    if sky_mask_path is not None:
-        mask = load_photo(sky_mask_path)
+    if sum(p is not None for p in (skyline_path, sky_mask_path, terrain_mask_path)) != 1:
+        raise InputError("give one of a skyline file, a sky mask and a terrain mask")
+    mask_path = sky_mask_path if sky_mask_path is not None else terrain_mask_path
+    if mask_path is not None:
+        kind = "sky" if sky_mask_path is not None else "terrain"
+        mask = load_photo(mask_path)
         if mask.shape[:2] != (height, width):
-            raise InputError(f"{os.fspath(sky_mask_path)}: the sky mask is {mask.shape[1]} x {mask.shape[0]} px, "
+            raise InputError(f"{os.fspath(mask_path)}: the {kind} mask is {mask.shape[1]} x {mask.shape[0]} px, "
                              f"the photo {width} x {height} (upright)")
-        sky = mask.mean(axis=2) > 127.0
+        white = mask.mean(axis=2) > 127.0
+        sky = white if kind == "sky" else ~white
         if not sky.any():
-            raise InputError(f"{os.fspath(sky_mask_path)}: the sky mask marks no sky (white pixels)")
+            raise InputError(f"{os.fspath(mask_path)}: the {kind} mask marks no sky "
+                             f"({'white' if kind == 'sky' else 'black'} pixels)")
         return skyline_of_terrain(~sky)
     sky = load_skyline(skyline_path)
     if sky.shape != (width,):
