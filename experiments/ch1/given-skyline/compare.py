@@ -1,13 +1,14 @@
 """Per photo, the localizer from the extracted skyline against the same from the mask's skyline (a given skyline).
 
-``python experiments/ch1/given-skyline/compare.py EXTRACTED.json GIVEN.json`` (two ``bench-real`` runs of one side,
-fov known)."""
+``python experiments/ch1/given-skyline/compare.py EXTRACTED.json GIVEN.json [known|unknown]`` (two ``bench-real``
+runs of one side; their rows of that fov mode, known if not named)."""
 import json
 import sys
 
 extracted, given = (json.load(open(p)) for p in sys.argv[1:3])
-rows_e = {r["photo"]: r for r in extracted["photos"] if r["fov_mode"] == "known"}
-rows_g = {r["photo"]: r for r in given["photos"] if r["fov_mode"] == "known"}
+mode = sys.argv[3] if len(sys.argv) > 3 else "known"
+rows_e = {r["photo"]: r for r in extracted["photos"] if r["fov_mode"] == mode}
+rows_g = {r["photo"]: r for r in given["photos"] if r["fov_mode"] == mode}
 
 
 def best_xy(r):
@@ -29,7 +30,7 @@ def cell(r):
     return f"{mark:8s} {('%.0f' % err) if err is not None else '-':>7s} {r['confidence']:5.2f}"
 
 
-print(f"extracted: {extracted['commit']}; given (the mask's skyline): {given['commit']}")
+print(f"fov {mode}. extracted: {extracted['commit']}; given (the mask's skyline): {given['commit']}")
 print(f"{'photo':34s} | {'extracted: status, m, conf':26s} | {'given: status, m, conf':26s}")
 counts = {k: 0 for k in ("e_best", "g_best", "e_right", "g_right", "e_wrong", "g_wrong")}
 for key in sorted(rows_g):
