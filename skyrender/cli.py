@@ -307,12 +307,13 @@ def localize(
             _check_writable(path, option, kinds)
     if preset not in ("auto", "photo", "render"):
         raise InputError(f"--preset must be auto, photo or render, got {preset!r}")
-    if sum(p is not None for p in (skyline_file, sky_mask, terrain_mask)) > 1:
+    given_files = (skyline_file, sky_mask, terrain_mask)  # given_skyline's order
+    if sum(p is not None for p in given_files) > 1:
         raise InputError("give at most one of --skyline, --sky-mask and --terrain-mask")
     prior = _parse_prior(prior_peak, prior_near)
     photo = load_photo(image)
-    given = (None if skyline_file is None and sky_mask is None and terrain_mask is None else
-             given_skyline(photo.shape[1], photo.shape[0], skyline_file, sky_mask, terrain_mask))
+    given = (given_skyline(photo.shape[1], photo.shape[0], *given_files)
+             if any(p is not None for p in given_files) else None)
     from_exif = exif_fov(str(image)) if fov is None else None
     if preset == "auto":
         preset = "photo" if is_camera_photo(str(image)) else "render"
