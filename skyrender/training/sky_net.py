@@ -159,12 +159,54 @@ def recolour_regions(img: np.ndarray, sky: np.ndarray, rng: np.random.Generator)
     return out
 
 
-def augment(image: np.ndarray, sky: np.ndarray, rng: np.random.Generator, recolour: float = 0.0):
-    """A random width, flip, exposure, white balance, gamma, saturation and noise; with
-    probability ``recolour`` also :func:`recolour_regions` (drawn from ``rng`` only then, so
-    ``recolour=0`` draws exactly what it did before the option existed)."""
+def swap_sky(image: np.ndarray, sky: np.ndarray, donor: np.ndarray, donor_sky: np.ndarray,
+             max_stretch: float = 2.5) -> np.ndarray | None:
+    """``image``'s sky (uint8 RGB; ``sky`` P(sky) at its size, NaN unknown) replaced by another photo's:
+    the donor's band of rows that is sky in every column (above its highest terrain), resized to the
+    image's width and stretched down to the image's lowest sky row, blended by P(sky) so the
+    boundary's own mixed pixels stay mixed. Where the image's truth is unknown it is left as it is.
+    None when the donor's clear band is too thin (stretched more than ``max_stretch`` times).
+
+    Why: the training photos come from few places, each with its own sky; a cloud bank from one
+    laid behind the ridges of another puts cumulus against snow and pale sky against hazy ranges in
+    combinations the photos lack (unseen places' commonest misses, ``experiments/photos/sky-swap/``)."""
     import cv2
 
+    H, W = sky.shape
+    known = np.isfinite(sky)
+    p = np.clip(np.nan_to_num(sky, nan=0.0), 0.0, 1.0)
+    rows = np.flatnonzero((p > 0).any(axis=1))
+    if len(rows) == 0:
+        return None
+    # the donor's rows that are sky in every column whose truth is known
+    terrain_rows = np.flatnonzero((np.nan_to_num(donor_sky, nan=1.0) < 0.5).any(axis=1))
+    clear_share = (terrain_rows[0] if len(terrain_rows) else donor_sky.shape[0]) / donor_sky.shape[0]
+    donor = cv2.resize(donor, (W, int(round(donor.shape[0] * W / donor.shape[1]))), interpolation=cv2.INTER_AREA)
+    band = int(clear_share * donor.shape[0]) - 1  # a row's margin: the boundary's mixed pixels stay out
+    need = int(rows[-1]) + 1
+    if band < 8 or need / band > max_stretch:
+        return None
+    fill = cv2.resize(donor[:band], (W, need), interpolation=cv2.INTER_LINEAR).astype(np.float32)
+    out = image.astype(np.float32)
+    a = np.where(known, p, 0.0)[:need, :, None]
+    out[:need] = fill * a + out[:need] * (1 - a)
+    return (out + 0.5).astype(np.uint8)
+
+
+def augment(image: np.ndarray, sky: np.ndarray, rng: np.random.Generator, recolour: float = 0.0,
+            donors: list | None = None, sky_swap: float = 0.0):
+    """A random width, flip, exposure, white balance, gamma, saturation and noise; with
+    probability ``recolour`` also :func:`recolour_regions`, with probability ``sky_swap`` the sky
+    of one of ``donors`` ((image, P(sky)) pairs) laid in (:func:`swap_sky`). Each is drawn from
+    ``rng`` only when its option is on, so with both 0 it draws exactly what it did before the
+    options existed."""
+    import cv2
+
+    if sky_swap and donors and rng.random() < sky_swap:
+        donor, donor_sky = donors[int(rng.integers(len(donors)))]
+        swapped = swap_sky(image, sky, donor, donor_sky)
+        if swapped is not None:
+            image = swapped
     lo, hi = TRAIN_WIDTHS
     w = int(rng.integers(lo // STRIDE, hi // STRIDE + 1)) * STRIDE
     h = max(STRIDE, int(round(image.shape[0] * w / image.shape[1] / STRIDE)) * STRIDE)
@@ -195,20 +237,21 @@ def boundary_weight(sky: np.ndarray, known: np.ndarray, reach: int = 3, gain: fl
 
 
 def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: int = 100, threads: int = 2,
-          dev_folds: tuple[int, ...] = (), recolour: float = 0.0, arch: str = "unet") -> dict:
+          dev_folds: tuple[int, ...] = (), recolour: float = 0.0, arch: str = "unet", sky_swap: float = 0.0) -> dict:
     import torch
 
     torch.manual_seed(seed)
     torch.set_num_threads(threads)
     rng = np.random.default_rng(seed)
     data = load_training_set(renders, seed, dev_folds)
+    donors = [(image, sky) for _, image, sky in data]
     model = build_model(arch)
     opt = torch.optim.Adam(model.parameters(), lr=2e-3)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=2e-3, total_steps=steps, pct_start=0.1)
     losses, curve, t0 = [], [], time.perf_counter()
     for step in range(steps):
         _, image, sky = data[int(rng.integers(len(data)))]
-        img, lab, known = augment(image, sky, rng, recolour)
+        img, lab, known = augment(image, sky, rng, recolour, donors, sky_swap)
         x = torch.from_numpy(net_input(img, (img.shape[1], img.shape[0])))
         y = torch.from_numpy(np.clip(lab, 0, 1))[None, None]
         wgt = torch.from_numpy(boundary_weight(lab, known))[None, None]
@@ -234,7 +277,7 @@ def train(steps: int, seed: int, renders: int, out: str = WEIGHTS, log_every: in
         torch.onnx.export(model, example, out, dynamo=False, input_names=["x"], output_names=["logits"],
                           dynamic_axes={"x": {2: "h", 3: "w"}, "logits": {2: "h2", 3: "w2"}}, opset_version=17)
     log = {"seed": seed, "steps": steps, "renders": renders, "threads": threads, "photos": len(data) - renders,
-           "dev_folds": list(dev_folds), "recolour": recolour, "arch": arch,
+           "dev_folds": list(dev_folds), "recolour": recolour, "sky_swap": sky_swap, "arch": arch,
            "train_widths": TRAIN_WIDTHS, "torch": torch.__version__, "curve": curve,
            "seconds": round(time.perf_counter() - t0, 1)}
     with open(os.path.splitext(out)[0] + ".json", "w") as f:
@@ -253,12 +296,14 @@ def main(argv=None) -> int:
                         help="also train on these folds of the dev photos (cross-fitting; the others stay unseen)")
     parser.add_argument("--recolour", type=float, default=0.0,
                         help="share of steps whose terrain near the skyline is hazed or whitened, or whose sky is tinted")
+    parser.add_argument("--sky-swap", type=float, default=0.0,
+                        help="share of steps whose sky is another training photo's (swap_sky)")
     parser.add_argument("--arch", choices=ARCHITECTURES, default="unet",
                         help="the network's layout (unet: the shipped weights; see build_model)")
     parser.add_argument("--out", default=WEIGHTS)
     args = parser.parse_args(argv)
     log = train(args.steps, args.seed, args.renders, args.out, threads=args.threads, dev_folds=tuple(args.dev_fold),
-                recolour=args.recolour, arch=args.arch)
+                recolour=args.recolour, arch=args.arch, sky_swap=args.sky_swap)
     print(f"wrote {args.out} ({log['photos']} photos, {log['renders']} renders, {log['seconds']:.0f} s)")
     return 0
 
