@@ -256,6 +256,8 @@ def localize(
     geojson: Optional[Path] = typer.Option(None, "--geojson", help="write the camera position and view cone"),
     candidates: int = typer.Option(0, "--candidates", help="also list the N best distinct places refined, the answer's "
                                    "(given or withheld) first: where to look when it abstains or doubts"),
+    peaks: bool = typer.Option(False, "--peaks-in-view", help="also list the DEM's peaks on the skyline seen from the "
+                               "answer: which summits the photo shows, where they are and how far"),
     skyline_file: Optional[Path] = typer.Option(None, "--skyline", help="the photo's skyline as you give it, instead of "
                                                 "the extracted one: .npy or .json as 'skyrender skyline --out' writes "
                                                 "it (corrected by hand, say)"),
@@ -344,8 +346,10 @@ def localize(
     if stats:
         st = result.stats.to_dict()
         print(f"stats: {json.dumps(st)}", file=sys.stderr)
+    summits = result.peaks_in_view(the_model, curvature=not flat_earth) if peaks else []
     if json_out:
-        emit_json({**result.to_json(), **({"candidates": places} if candidates else {})})
+        emit_json({**result.to_json(), **({"candidates": places} if candidates else {}),
+                   **({"peaks_in_view": summits} if peaks else {})})
         return 0 if result.localized else 3
     if result.localized:
         d = result.to_json()
@@ -364,7 +368,22 @@ def localize(
                    f"{result.seconds:.1f} s){second}{hint}")
     for line in places_text(places, result.localized):
         typer.echo(line)
+    for line in peaks_text(summits):
+        typer.echo(line)
     return 0 if result.localized else 3
+
+
+def peaks_text(summits: list[dict]) -> list[str]:
+    """``localize --peaks-in-view``'s lines (:meth:`LocalizationResult.peaks_in_view`), left to right in the photo."""
+    if not summits:
+        return []
+    lines = [f"peaks in view, left to right ({len(summits)}):"]
+    for p in summits:
+        where = f"lat {p['lat']:.5f}, lon {p['lon']:.5f}" if p["lat"] is not None else f"x={p['x']:.0f} y={p['y']:.0f}"
+        lines.append(f"  P{p['id']} {p['elevation_m']:.0f} m{' (major)' if p['major'] else ''}: {where}; "
+                     f"{p['distance_m'] / 1000:.1f} km away, bearing {p['bearing_deg']:.0f} deg; "
+                     f"in the photo at u={p['u']:.0f}, v={p['v']:.0f}")
+    return lines
 
 
 #: ``localize --candidates``: at most this many places listed (the photo preset refines 16 poses a search).

@@ -41,28 +41,6 @@ def write_image(path, image: np.ndarray) -> None:
         raise InputError(f"cannot write image {path} (unknown extension or unwritable location)")
 
 
-def peaks_in_view(model, pose, intrinsics, skyline=None, curvature: bool = True, on_skyline_px: float = 4.0):
-    """Model feature points a pose sees inside the image, with their projections.
-
-    Returns (rows, uv, distance_m): feature-table rows, (n, 2) image points and
-    horizontal distances. With a ``skyline`` (W,), only points on it (within
-    ``on_skyline_px``) are kept: the peaks that make the skyline.
-    """
-    from .camera import project
-
-    f = model.features
-    uv, front = project(f.xyz, pose, intrinsics, curvature)
-    W, H = intrinsics.width, intrinsics.height
-    ok = front & (uv[:, 0] >= 0) & (uv[:, 0] < W) & (uv[:, 1] >= 0) & (uv[:, 1] < H)
-    if skyline is not None:
-        col = np.clip(np.nan_to_num(uv[:, 0]), 0, W - 1).astype(np.int64)
-        with np.errstate(invalid="ignore"):
-            ok &= np.abs(uv[:, 1] - skyline[col]) <= on_skyline_px
-    rows = np.flatnonzero(ok)
-    dist = np.hypot(f.x[rows] - pose[0], f.y[rows] - pose[1])
-    return rows, uv[rows], dist
-
-
 def place_labels(anchors: list[tuple[int, int]], sizes: list[tuple[int, int]], shape: tuple[int, int],
                  gap: int = 3, tries: int = 6) -> list[tuple[int, int] | None]:
     """Text origins (x, y: the baseline's left end, px) for labels of the given sizes
@@ -121,6 +99,8 @@ def localization_overlay(image: np.ndarray, result, model, max_labels: int = 12,
     if result.pose is None:
         cv2.putText(out, "abstained", (10, 24), cv2.FONT_HERSHEY_SIMPLEX, 0.7, (255, 255, 0), 2, cv2.LINE_AA)
         return out
+    from .localizer.result import peaks_in_view
+
     rows, uv, dist = peaks_in_view(model, result.pose, result.intrinsics, result.rendered_skyline)
     f = model.features
     order = np.argsort(-f.z[rows])[:max_labels]  # highest first: a lesser peak yields its place

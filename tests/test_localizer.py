@@ -943,3 +943,64 @@ def test_the_kernel_compiled_at_install_is_the_one_the_alignment_calls():
                        params=ScoreParams(max_swing_deg=roll), swing=np.zeros(len(rendered)), agreement=False)
     assert len(rendered) * len(columns) > verification.MIN_BLOCK_ELEMENTS  # in blocks: the kernel ran
     assert len(best_fits.signatures) == compiled
+
+
+def test_a_result_lists_the_peaks_on_its_skyline_left_to_right_with_where_they_stand(view_dem):
+    """``LocalizationResult.peaks_in_view``: the model's peaks on the skyline rendered from the answer (not those the
+    skyline passes above), left to right, each with its lat/lon on the DEM, distance, bearing and place in the photo;
+    none when the localizer abstained."""
+    from types import SimpleNamespace
+
+    from skyrender.localizer.result import LocalizationResult, LocalizeStats
+    from skyrender.model.peaks import PeakTable
+
+    dem = view_dem
+    cx, cy = dem.centre
+    pose = np.array([cx, cy, 400.0, 90.0, 0.0, 0.0])  # looking east
+    K = Intrinsics.from_fov(60.0, 640, 480)
+    # three summits ahead (north-east, east, south-east) and one behind the camera
+    xy = np.array([[cx + 2000, cy + 800], [cx + 3000, cy], [cx + 2500, cy - 1200], [cx - 2000, cy]])
+    peaks = PeakTable(id=np.array([7, 3, 5, 9]), x=xy[:, 0], y=xy[:, 1], z=np.array([600.0, 650, 550, 700]),
+                      row=np.zeros(4, int), col=np.zeros(4, int), prominence=np.full(4, 50.0),
+                      major=np.array([True, False, False, True]))
+    uv, _ = project(peaks.xyz, pose, K, True)
+    skyline = np.full(K.width, 10.0)
+    for k in (0, 1):  # the skyline runs through the first two; the third stands below it (hidden behind a ridge)
+        skyline[int(uv[k, 0])] = uv[k, 1]
+    model = SimpleNamespace(features=peaks, dem=dem)
+    result = LocalizationResult("localized", pose, 60.0, 0.99, 1.0, 0, LocalizeStats(), K, skyline.copy(), skyline)
+    listed = result.peaks_in_view(model)
+    assert [p["id"] for p in listed] == [7, 3]  # left to right: the north-eastern summit first
+    first = listed[0]
+    lon, lat = dem.to_lonlat(xy[0, 0], xy[0, 1])
+    assert first["lat"] == pytest.approx(float(lat)) and first["lon"] == pytest.approx(float(lon))
+    assert first["distance_m"] == pytest.approx(np.hypot(2000, 800))
+    assert first["bearing_deg"] == pytest.approx(np.degrees(np.arctan2(2000, 800)))
+    assert listed[1]["bearing_deg"] == pytest.approx(90.0)
+    assert (first["u"], first["v"]) == pytest.approx(tuple(uv[0])) and first["major"] and not listed[1]["major"]
+    assert first["elevation_m"] == 600.0 and (first["x"], first["y"]) == tuple(xy[0])
+    abstained = LocalizationResult("abstained", None, None, 0.2, 1.0, 0, LocalizeStats(), K, skyline)
+    assert abstained.peaks_in_view(model) == []
+
+
+def test_cli_localize_lists_the_peaks_in_view_in_its_json_and_its_text(scene, views, model_dir, tmp_path, capsys):
+    from skyrender.cli import peaks_text
+    from skyrender.viz import write_image
+
+    _, terrain, model = scene
+    pose = views.poses[2]
+    write_image(tmp_path / "photo.png", photo_of(terrain, pose))
+    code, out, err = _run(capsys, ["localize", tmp_path / "photo.png", "--model", model_dir, "--height", 2,
+                                   "--fov", 60, "--json", "--peaks-in-view"])
+    assert code == 0, err
+    listed = json.loads(out)["peaks_in_view"]
+    assert len(listed) >= 2
+    assert [p["u"] for p in listed] == sorted(p["u"] for p in listed)
+    # the answer is metres from the truth: each peak listed stands where the true camera sees it, on the true skyline
+    rows = [int(np.flatnonzero(model.features.id == p["id"])[0]) for p in listed]
+    uv, front = project(model.features.xyz[rows], pose.array(), K, True)
+    assert front.all() and np.abs(uv - [[p["u"], p["v"]] for p in listed]).max() < 3.0
+    lines = peaks_text(listed)
+    assert lines[0] == f"peaks in view, left to right ({len(listed)}):" and len(lines) == len(listed) + 1
+    assert lines[1].startswith(f"  P{listed[0]['id']} ") and "km away, bearing" in lines[1]
+    assert peaks_text([]) == []

@@ -11,8 +11,31 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..camera import Intrinsics, horizontal_fov
+from ..camera import Intrinsics, horizontal_fov, project
 from .confidence import distinct_places
+
+
+def peaks_in_view(model, pose, intrinsics, skyline=None, curvature: bool = True, on_skyline_px: float = 4.0):
+    """Model feature points a pose sees inside the image, with their projections.
+
+    ``pose``: (x, y, z, pan, tilt, swing), m and deg (README, Conventions); ``intrinsics``: the image's;
+    ``curvature``: the earth's curvature and refraction applied as the renderer applies them.
+    Returns (rows, uv, distance_m): feature-table rows, (n, 2) image points (px) and
+    horizontal distances (m). With a ``skyline`` (W,) (v, px: the one rendered from ``pose``), only
+    points on it (within ``on_skyline_px``) are kept: the peaks that make the skyline, not those
+    hidden behind nearer terrain.
+    """
+    f = model.features
+    uv, front = project(f.xyz, pose, intrinsics, curvature)
+    W, H = intrinsics.width, intrinsics.height
+    ok = front & (uv[:, 0] >= 0) & (uv[:, 0] < W) & (uv[:, 1] >= 0) & (uv[:, 1] < H)
+    if skyline is not None:
+        col = np.clip(np.nan_to_num(uv[:, 0]), 0, W - 1).astype(np.int64)
+        with np.errstate(invalid="ignore"):
+            ok &= np.abs(uv[:, 1] - skyline[col]) <= on_skyline_px
+    rows = np.flatnonzero(ok)
+    dist = np.hypot(f.x[rows] - pose[0], f.y[rows] - pose[1])
+    return rows, uv[rows], dist
 
 
 @dataclass
@@ -99,6 +122,29 @@ class LocalizationResult:
         return {"status": "localized", "x": x, "y": y, "z": z, "pan": pan, "tilt": tilt, "swing": swing,
                 "fov": self.fov, "lat": lat, "lon": lon, "crs": self.crs, "confidence": round(self.confidence, 4),
                 "seconds": round(self.seconds, 3), "hypotheses": self.hypotheses}
+
+    def peaks_in_view(self, model, curvature: bool = True) -> list[dict]:
+        """The model's peaks on the skyline rendered from the answer's pose (:func:`peaks_in_view`): which
+        summits the photo shows. Each a dict: ``id`` (the model's peak id), ``x``, ``y`` (m, the world frame),
+        ``elevation_m``, ``lat``/``lon`` (WGS 84, where the model's DEM has a CRS; else None), ``distance_m``
+        (horizontal, from the camera), ``bearing_deg`` (clockwise from grid north), ``u``, ``v`` (px, where it
+        stands in the photo), ``major``; left to right in the photo. Empty when it abstained."""
+        if not self.localized or self.rendered_skyline is None:
+            return []
+        rows, uv, dist = peaks_in_view(model, self.pose, self.intrinsics, self.rendered_skyline, curvature)
+        f, dem = model.features, model.dem
+        lon, lat = (dem.to_lonlat(f.x[rows], f.y[rows]) if dem.crs is not None
+                    else (np.full(len(rows), np.nan),) * 2)
+        bearing = np.degrees(np.arctan2(f.x[rows] - self.pose[0], f.y[rows] - self.pose[1])) % 360.0
+        out = []
+        for i in np.argsort(uv[:, 0], kind="stable"):
+            j = rows[i]
+            out.append({"id": int(f.id[j]), "x": float(f.x[j]), "y": float(f.y[j]), "elevation_m": float(f.z[j]),
+                        "lat": None if np.isnan(lat[i]) else float(lat[i]),
+                        "lon": None if np.isnan(lon[i]) else float(lon[i]),
+                        "distance_m": float(dist[i]), "bearing_deg": float(bearing[i]),
+                        "u": float(uv[i, 0]), "v": float(uv[i, 1]), "major": bool(f.major[j])})
+        return out
 
     def places(self, k: int, apart_m: float, dem=None) -> list[dict]:
         """The best ``k`` distinct places among the refined poses (``stats.refined_poses``), each farther than
