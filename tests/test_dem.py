@@ -229,6 +229,32 @@ def test_spikes_are_the_cells_far_from_their_5x5_median():
     np.testing.assert_array_equal(find_spikes(z, 30.0, valid), expected)
 
 
+def test_spikes_away_from_the_voids_are_refilled_as_a_fill_of_the_whole_grid_would():
+    """repair_elevation fills the voids once and refills spikes that stand 3 or more cells from every void on a window of
+    their own: the same values as filling the whole grid again without them (what it does when a spike is nearer)."""
+    from scipy import ndimage
+
+    from skyrender.dem.repair import _fill, repair_elevation
+
+    rng = np.random.default_rng(2)
+    z = ndimage.gaussian_filter(rng.normal(0.0, 300.0, (160, 140)), 3.0) * 4.0 + 1500.0
+    z[40:110, 60:130] = np.nan  # a large void (a missing tile's corner)
+    z[20, 30] += 900.0  # spikes far from it,
+    z[130, 100] += 900.0
+    z[140, 10] -= 1500.0  # a pit,
+    z[75, 57] += 900.0  # and one two cells from its edge
+    for spikes_near_void in (False, True):
+        zz = z.copy()
+        if not spikes_near_void:
+            zz[75, 57] -= 900.0
+        fixed, report, _ = repair_elevation(zz, 30.0)
+        kept = np.isfinite(zz)
+        kept[[20, 130, 140] + ([75] if spikes_near_void else []), [30, 100, 10] + ([57] if spikes_near_void else [])] = False
+        assert report.spikes_repaired == 3 + spikes_near_void
+        expected, _ = _fill(np.where(kept, zz, 0.0), kept)
+        np.testing.assert_array_equal(fixed, expected)
+
+
 @pytest.mark.parametrize("content", [b"hello, I am not a DEM\n", b""])
 def test_a_text_file_is_not_a_dem(tmp_path, content):
     path = tmp_path / "dem.tif"

@@ -25,11 +25,13 @@ def spike_threshold_m(cell_size_m: float) -> float:
     return 100.0 + 3.0 * cell_size_m
 
 
-def find_spikes(z: np.ndarray, cell_size_m: float, valid: np.ndarray) -> np.ndarray:
+def find_spikes(z: np.ndarray, cell_size_m: float, valid: np.ndarray, filled: np.ndarray | None = None) -> np.ndarray:
     """Boolean mask of cells far above (or, by twice as much, below) their
     5 x 5 neighbourhood median. Pits get the laxer test because narrow real
-    gorges are deep at 90 m cells, and a pit never makes a phantom ridge."""
-    filled, _ = _fill(z, valid)
+    gorges are deep at 90 m cells, and a pit never makes a phantom ridge.
+    ``filled``: z with its invalid cells filled (:func:`_fill`), where the caller has it."""
+    if filled is None:
+        filled, _ = _fill(z, valid)
     threshold = spike_threshold_m(cell_size_m)
     # The median lies between the window's minimum and maximum, so only cells that far above
     # their window's minimum (or below its maximum) can be spikes (pits): the median is taken
@@ -84,6 +86,29 @@ def _fill(z: np.ndarray, valid: np.ndarray) -> tuple[np.ndarray, np.ndarray | No
         out[still] = z[tuple(i[still] for i in nearest)]
     out[valid] = z[valid]
     return out, far
+
+
+#: A spike this many cells or more from every void is refilled from its own surroundings (:func:`_refill_cells`): GDAL
+#: fills a void from the valid cells next to it, so such a spike, valid or not, changes no void's fill
+SPIKE_SHIELD_CELLS = 3
+
+
+def _near(cells: np.ndarray, voids: np.ndarray, reach: int) -> bool:
+    """Whether any of ``cells`` lies within ``reach`` cells (a square window) of a ``voids`` cell."""
+    return bool((ndimage.maximum_filter(voids, size=2 * reach + 1, mode="constant") & cells).any())
+
+
+def _refill_cells(filled: np.ndarray, valid: np.ndarray, cells: np.ndarray, margin: int = 16) -> np.ndarray:
+    """``filled`` with ``cells`` (invalid, each surrounded by valid ones) filled again by GDAL's fill of a window
+    ``margin`` cells around each: the values the whole grid's fill gives them (GDAL takes a cell's nearest valid
+    cells in each direction, here its neighbours; tested), without filling the grid's voids again (8 s for a window
+    reaching into a missing tile)."""
+    out = filled.copy()
+    for r, c in zip(*np.nonzero(cells)):
+        box = (slice(max(r - margin, 0), r + margin + 1), slice(max(c - margin, 0), c + margin + 1))
+        window = _gdal_fill(filled[box], valid[box], 2 * margin + 1)
+        out[r, c] = window[r - box[0].start, c - box[1].start]
+    return out
 
 
 def _void_distance(valid: np.ndarray) -> tuple[np.ndarray, tuple[slice, slice]]:
@@ -142,9 +167,15 @@ def repair_elevation(z: np.ndarray, cell_size_m: float, nodata_mask: np.ndarray 
         void |= nodata_mask
     implausible = ~void & ((z < PLAUSIBLE_RANGE_M[0]) | (z > PLAUSIBLE_RANGE_M[1]))
     valid = ~void & ~implausible
-    spikes = find_spikes(np.where(valid, z, 0.0), cell_size_m, valid)
+    fixed, far = _fill(np.where(valid, z, 0.0), valid)
+    spikes = find_spikes(np.where(valid, z, 0.0), cell_size_m, valid, fixed)
     bad_spikes = implausible | spikes
-    fixed, far = _fill(np.where(valid & ~spikes, z, 0.0), valid & ~spikes)
+    if spikes.any():  # filled again without them (where there are none the fill is the same)
+        kept = valid & ~spikes
+        if far is not None and not _near(spikes, ~valid, SPIKE_SHIELD_CELLS):
+            fixed = _refill_cells(fixed, kept, spikes)
+        else:
+            fixed, far = _fill(np.where(kept, z, 0.0), kept)
     far_cells = 0 if far is None else int(np.count_nonzero(far))
     notes = []
     if void.any():
