@@ -40,8 +40,8 @@ def load(which):
     return load_dem("../shared/data/dem/srtm1_glarus_1arc.tif")
 
 
-rounds = int(sys.argv[1]) if len(sys.argv) > 1 else 3
-for which in ("ch1-window", "glarus-1arcsec"):
+rounds = int(sys.argv[1]) if len(sys.argv) > 1 else 3  # 0: define the functions only (all_tiles.py)
+for which in ("ch1-window", "glarus-1arcsec") if rounds else ():
     seconds = {"before": [], "now": []}
     out = {}
     for r in range(rounds):
