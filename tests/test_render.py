@@ -108,6 +108,41 @@ def test_frozen_skylines_equal_unfrozen_ones_whatever_the_order_of_calls(monkeyp
         np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.parametrize("near_m", [0.0, 300.0])
+def test_skylines_started_from_a_guess_or_between_their_neighbours_equal_the_whole_column_bisection(
+        monkeypatch, view_terrain, near_m):
+    """``render_skylines(guess=...)`` starts each column's bisection at a guess (near, far, NaN, past the frame's
+    edges) and, with no guess, bisects every COARSE_COLUMNS-th column first and starts the others between their
+    neighbours: on level cameras, whose columns hit terrain below one boundary and miss above it, the same skylines
+    and distances to the bit as bisecting every whole column; frames looking into the ground or the sky included."""
+    import skyrender.render.skyline as skyline
+
+    dem = view_terrain.dem
+    rng = np.random.default_rng(3)
+    P = 40
+    xy = rng.uniform(-8000, 8000, (P, 2)) + dem.centre
+    poses = np.zeros((P, 6))
+    poses[:, :2] = xy
+    poses[:, 2] = dem.ground(xy[:, 0], xy[:, 1]) + 2.0
+    poses[:, 3] = rng.uniform(0, 360, P)
+    poses[-4:, 4] = [-80.0, -80.0, 80.0, 80.0]  # terrain to the top of every column; sky to the bottom
+    K = Intrinsics.from_fov(50.0, 96, 80)
+
+    def render(**kwargs):
+        return render_skylines(view_terrain, poses, K, tol=0.1, near_m=near_m, with_distance=True, **kwargs)
+
+    two_pass = render()
+    monkeypatch.setattr(skyline, "COARSE_COLUMNS", 10 ** 6)  # every column bisected whole
+    whole = render()
+    assert np.isnan(whole[0][-2:]).all() and (whole[0][-4:-2] == 0).all() and np.isfinite(whole[0][:-4]).mean() > 0.9
+    guesses = [whole[0] + rng.normal(0, s, whole[0].shape) for s in (0.2, 3.0, 40.0)]
+    guesses.append(np.where(rng.random(whole[0].shape) < 0.5, np.nan, -50.0))  # no guess, or one above the frame
+    guesses.append(np.full(whole[0].shape, 500.0))  # below it
+    for got in [two_pass] + [render(guess=g) for g in guesses]:
+        np.testing.assert_array_equal(got[0], whole[0])
+        np.testing.assert_array_equal(got[1], whole[1])
+
+
 def test_batched_skylines_equal_one_by_one(view_terrain, valley_view):
     pose, K = valley_view
     poses = np.tile(pose.array(), (5, 1))
