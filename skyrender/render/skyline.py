@@ -15,7 +15,7 @@ skyline looks like from anywhere within a few hundred metres (the far
 horizon). Rays start ``near_m`` out; one that starts under the ground counts
 as a hit (the terrain there rises above it), which keeps each column monotone.
 
-Two passes (sub-pixel mode, :data:`COARSE_COLUMNS`): every 4th column is bisected from the whole column,
+Two passes (sub-pixel mode, an option: :data:`COARSE_COLUMNS`): every 4th column is bisected from the whole column,
 then each other column starts between its neighbours' boundaries and steps out until it brackets its own
 (:func:`_bisect_from`), ending on the same grid interval: the same skyline to the bit wherever a column is
 monotone as above, in 0.7-0.8x the time (``experiments/render/two-pass/``).
@@ -88,7 +88,7 @@ def render_skylines(terrain: Terrain, poses, intrinsics: Intrinsics, *, subpixel
     exact = terrain.jit and subpixel and guess_is_exact(H, n_iter)
     if guess is not None and exact:
         passes = [(np.arange(W), np.asarray(guess, np.float64).reshape(len(pa), W))]
-    elif guess is None and exact and W >= 2 * COARSE_COLUMNS:
+    elif guess is None and exact and COARSE_COLUMNS and W >= 2 * COARSE_COLUMNS:
         # every COARSE_COLUMNS-th column (and the last) first; the others then start between their neighbours
         first = np.unique(np.r_[np.arange(0, W, COARSE_COLUMNS), W - 1])
         passes = [(first, None), (np.setdiff1d(np.arange(W), first), "between")]
@@ -118,10 +118,11 @@ def render_skylines(terrain: Terrain, poses, intrinsics: Intrinsics, *, subpixel
     return out[0] if single else out
 
 
-#: Sub-pixel renders of this many columns or more first bisect every COARSE_COLUMNS-th column from the whole
+#: With this set (an int, e.g. 4), sub-pixel renders first bisect every COARSE_COLUMNS-th column from the whole
 #: column, then start each other column between its two neighbours' boundaries (:func:`_bisect_from`): the same
-#: skylines to the bit, in about half the rays where the skyline is smooth at that spacing.
-COARSE_COLUMNS = 4
+#: skylines to the bit where columns are monotone, in 0.68-0.80x the time. Off (None) until measured on the real-
+#: photo benchmark: on tilted, rolled cameras 1 column in 500,000 came out otherwise (experiments/render/two-pass/).
+COARSE_COLUMNS = None
 
 
 def guess_is_exact(H: int, n_iter: int) -> bool:
