@@ -142,8 +142,7 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
 
     mi = terrain.mi
     P = len(basis)
-    cols = np.arange(W) if cols is None else np.asarray(cols)
-    n_cols = len(cols)
+    n_cols = W if cols is None else len(cols)  # a subset of the columns is gathered per thread; all of them are not
     # one frozen function per kernel shape, recorded once and then replayed: with one for all,
     # Dr.Jit 1.5 replayed a near-clipped call with the recording of another shape now and then
     # (wrong skylines, up to 50 deg off, after calls with and without the clip were mixed)
@@ -164,7 +163,8 @@ def _skyline_kernel(terrain: Terrain, basis: np.ndarray, W: int, H: int, subpixe
         start = None if guess is None else mi.Float(guess.astype(np.float32).ravel())
         result = frozen(terrain.scene, mi.Float(basis.astype(np.float32).ravel()), dr.arange(mi.UInt32, P * n_cols),
                         dr.opaque(mi.Float, terrain.max_distance), dr.opaque(mi.Float, near_m), terrain.ground,
-                        mi.Float(terrain.grid), start, mi.UInt32(cols.astype(np.uint32)))
+                        mi.Float(terrain.grid), start,
+                        None if n_cols == W else mi.UInt32(np.asarray(cols).astype(np.uint32)))
     finally:
         if collecting:
             gc.enable()
